@@ -152,7 +152,9 @@ class CutResult:
 # input checks
 
 
-def _check_chart(V: ArrayLike, F: ArrayLike, name: str) -> tuple[np.ndarray, np.ndarray, EdgeTopology]:
+def _check_chart(
+    V: ArrayLike, F: ArrayLike, name: str
+) -> tuple[np.ndarray, np.ndarray, EdgeTopology]:
     """Shape, range, edge-manifoldness and orientation checks (pinched vertices are allowed)."""
     V, F = as_mesh_arrays(V, F, name)
     n, m = V.shape[0], F.shape[0]
@@ -182,9 +184,7 @@ def _check_chart(V: ArrayLike, F: ArrayLike, name: str) -> tuple[np.ndarray, np.
     flipped = np.flatnonzero(topo.interior & (fwd != 1))
     if len(flipped):
         items = ", ".join(f"edge {topo.E[e].tolist()}" for e in flipped[:_SHOW])
-        raise MeshError(
-            f"{name}: inconsistent face orientation on {len(flipped)} edge(s): {items}"
-        )
+        raise MeshError(f"{name}: inconsistent face orientation on {len(flipped)} edge(s): {items}")
     return V, F, topo
 
 
@@ -223,9 +223,7 @@ def _open(F: np.ndarray, topo: EdgeTopology, cut: np.ndarray) -> tuple[np.ndarra
         cols.append(j1 * m + f1)
     rows = np.concatenate(rows)
     cols = np.concatenate(cols)
-    A = sp.csr_matrix(
-        (np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m)
-    )
+    A = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m))
     ncomp, comp = connected_components(A, directed=False)
     corner_vertex = F.T.ravel()  # node j*m + f -> F[f, j]
     comp_vertex = np.empty(ncomp, dtype=np.int64)
@@ -563,7 +561,12 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
         )
     log.info(
         "%s: %s cut, %d edge(s), length %.4g (genus %d, %d loop(s))",
-        name, method, len(res.cut_edges), res.cut_length, g, b,
+        name,
+        method,
+        len(res.cut_edges),
+        res.cut_length,
+        g,
+        b,
     )
     return res
 
@@ -654,8 +657,12 @@ def cut_along_paths(
         cut[_edge_ids(topo_u, len(umap), _path_edges(p))] = True
     res = _finish(Vu, Fu, topo_u, cut, before, "paths", base_map=umap, paths=paths)
     if not res.topology_after.is_disk:
-        log.warning("%s: after cutting along %d path(s) the chart is not a disk: %s",
-                    name, len(pairs), res.topology_after)
+        log.warning(
+            "%s: after cutting along %d path(s) the chart is not a disk: %s",
+            name,
+            len(pairs),
+            res.topology_after,
+        )
     return res
 
 

@@ -1,0 +1,336 @@
+"""Sparse Hessian energies on triangle meshes (ALGORITHM.md section 6).
+
+:func:`hlle_energy` builds the Hessian locally linear embedding energy of Donoho & Grimes as
+adapted to meshes by Mejia et al. (GRAPP 2016, the paper's ref. [12])::
+
+    K = sum_i A_i * S_i^T H_i^T H_i S_i
+
+For every vertex ``i``: ``N_i`` is its 2-ring (grown ring by ring until it has at least
+``min_neighbors`` vertices besides ``i``), ``(t1, t2, n)`` a tangent frame whose normal ``n`` is
+the area-weighted mean of the incident face normals, ``(u, v)`` the local coordinates of the
+vertices of ``N_i`` (relative to ``i``), and ``H_i`` (3 x |N_i|) the rows of the least-squares fit
+``f ~ a + b u + c v + d u^2/2 + e u v + g v^2/2`` that give ``(d, sqrt(2) e, g)``, so that
+``|H_i f|^2 = ||Hess f||_F^2`` at ``i``.  ``A_i`` is the Voronoi area of ``i`` and ``S_i`` selects
+``N_i``.
+
+The quadratic rows are computed after projecting out the affine part (Frisch-Waugh-Lovell):
+``H_i = pinv(R Q) R`` with ``R = I - X pinv(X)``, ``X = [1 u v]``, ``Q = [u^2/2, u v, v^2/2]``.
+With a full-rank fit this equals the corresponding rows of ``pinv([X Q])``; it additionally keeps
+``H_i X = 0`` *exactly* when the fit is under-determined (tiny charts), so affine functions of
+the local coordinates are always in the null space of every ``H_i``.
+
+``K`` is assembled as ``B^T diag(A) B`` with ``B`` the (3n x n) sparse stack of the ``H_i S_i``,
+vertices batched by neighbourhood size (no Python loop over vertices).
+
+:func:`curved_hessian_energy` wraps ``igl.curved_hessian_energy`` (Stein et al. 2020), whose
+null space on a developable surface contains the intrinsic coordinates.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Literal
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike
+
+from .checks import as_mesh_arrays
+from .errors import MeshError
+
+__all__ = [
+    "hlle_energy",
+    "curved_hessian_energy",
+    "hessian_energy",
+    "vertex_neighborhoods",
+    "HLLE_MIN_NEIGHBORS",
+]
+
+log = logging.getLogger(__name__)
+
+#: Smallest neighbourhood (vertices besides the centre) of the local quadratic fit; the fit has
+#: 6 unknowns, so 6 neighbours + the centre make it over-determined.
+HLLE_MIN_NEIGHBORS: int = 6
+
+#: Rings beyond which neighbourhoods stop growing (a chart smaller than that uses everything).
+_MAX_RINGS: int = 8
+
+#: Vertices per batched pseudo-inverse call (memory bound: batch * k * k doubles).
+_BATCH: int = 20000
+
+
+def vertex_neighborhoods(
+    n: int, F: np.ndarray, min_neighbors: int = HLLE_MIN_NEIGHBORS, rings: int = 2
+) -> sp.csr_matrix:
+    """Neighbourhood of every vertex: its ``rings``-ring, grown until ``min_neighbors``.
+
+    Parameters
+    ----------
+    n : int
+        Number of vertices.
+    F : (m, 3) int64
+        Triangles.
+    min_neighbors : int
+        Grow a vertex's neighbourhood ring by ring until it holds at least this many vertices
+        besides itself (or stops growing: its component is exhausted).
+    rings : int
+        Starting ring count (2 for HLLE).
+
+    Returns
+    -------
+    N : (n, n) scipy.sparse.csr_matrix of bool
+        ``N[i, j]`` is True when ``j`` is in the neighbourhood of ``i``; the diagonal is set.
+        Vertices not referenced by ``F`` have only themselves.
+    """
+    ii = F[:, [0, 1, 2, 1, 2, 0]].ravel()
+    jj = F[:, [1, 2, 0, 0, 1, 2]].ravel()
+    A = sp.csr_matrix((np.ones(len(ii), dtype=np.int8), (ii, jj)), shape=(n, n))
+    A = (A + sp.identity(n, dtype=np.int8, format="csr")).astype(bool).astype(np.int8)
+    N = A.copy()
+    for _ in range(rings - 1):
+        N = (N @ A).astype(bool).astype(np.int8)
+    N = N.tocsr()
+    for _ in range(_MAX_RINGS):
+        size = np.diff(N.indptr) - 1
+        small = np.flatnonzero(size < min_neighbors)
+        if len(small) == 0:
+            break
+        sub = N[small]
+        grown = (sub @ A).astype(bool).astype(np.int8).tocsr()
+        if np.array_equal(np.diff(grown.indptr), np.diff(sub.indptr)):
+            break  # every small neighbourhood already covers its component
+        rows = np.ones(n, dtype=bool)
+        rows[small] = False
+        keep = sp.diags(rows.astype(np.int8), dtype=np.int8) @ N
+        P = sp.csr_matrix(
+            (np.ones(len(small), dtype=np.int8), (small, np.arange(len(small)))),
+            shape=(n, len(small)),
+        )
+        N = (keep + P @ grown).astype(bool).astype(np.int8).tocsr()
+    N.sort_indices()
+    return N.astype(bool)
+
+
+def _vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(n, 3) area-weighted vertex normals (unit; zero for unreferenced vertices)."""
+    FN = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])  # length = 2 * area
+    N = np.zeros_like(V)
+    for j in range(3):
+        np.add.at(N, F[:, j], FN)
+    nrm = np.linalg.norm(N, axis=1)
+    ok = nrm > 0
+    N[ok] /= nrm[ok, None]
+    return N
+
+
+def _tangent_frames(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal tangent vectors ``t1, t2`` (each (n, 3)) with ``t1 x t2 = N``."""
+    axis = np.argmin(np.abs(N), axis=1)
+    E = np.zeros_like(N)
+    E[np.arange(len(N)), axis] = 1.0
+    t1 = np.cross(N, E)
+    t1 /= np.maximum(np.linalg.norm(t1, axis=1), 1e-300)[:, None]
+    t2 = np.cross(N, t1)
+    return t1, t2
+
+
+def _local_hessian_rows(
+    P: np.ndarray, normal: np.ndarray, coords: str
+) -> np.ndarray:
+    """Hessian rows for a batch of neighbourhoods of equal size.
+
+    Parameters
+    ----------
+    P : (b, k, 3) float64
+        Neighbourhood positions relative to the centre (centre first, at the origin).
+    normal : (b, 3) float64
+        Unit normals at the centres.
+    coords : {"projection", "chord"}
+        Local coordinates: orthogonal projection onto the tangent plane, or the projected
+        direction rescaled to the 3D distance to the centre (a first-order exponential map).
+
+    Returns
+    -------
+    H : (b, 3, k) float64
+        Rows giving ``(d, sqrt(2) e, g)`` of the local quadratic fit.
+    """
+    t1, t2 = _tangent_frames(normal)
+    u = np.einsum("bkd,bd->bk", P, t1)
+    v = np.einsum("bkd,bd->bk", P, t2)
+    if coords == "chord":
+        r3 = np.linalg.norm(P, axis=2)
+        r2 = np.hypot(u, v)
+        s = np.where(r2 > 0, r3 / np.where(r2 > 0, r2, 1.0), 1.0)
+        u, v = u * s, v * s
+    # Scale-normalise each neighbourhood (conditioning); undone below: H scales as 1/h^2.
+    h = np.sqrt(np.mean(u**2 + v**2, axis=1))
+    h = np.where(h > 0, h, 1.0)
+    u = u / h[:, None]
+    v = v / h[:, None]
+    b, k = u.shape
+    X = np.stack([np.ones_like(u), u, v], axis=2)  # (b, k, 3)
+    Q = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)  # (b, k, 3)
+    Xp = np.linalg.pinv(X)  # (b, 3, k)
+    R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto affine residual space
+    RQ = R @ Q
+    H = np.linalg.pinv(RQ) @ R  # (b, 3, k)
+    H[:, 1, :] *= np.sqrt(2.0)
+    return H / (h**2)[:, None, None]
+
+
+def hlle_energy(
+    V: ArrayLike,
+    F: ArrayLike,
+    *,
+    min_neighbors: int = HLLE_MIN_NEIGHBORS,
+    coords: Literal["projection", "chord"] = "projection",
+    area: Literal["voronoi", "barycentric"] = "voronoi",
+    return_parts: bool = False,
+):
+    """HLLE Hessian energy matrix of a triangle mesh (Mejia et al. 2016).
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions.
+    F : (m, 3) array_like of int
+        Triangles.
+    min_neighbors : int
+        Minimum neighbourhood size (besides the centre) of the local quadratic fit.
+    coords : {"projection", "chord"}
+        Local (u, v) coordinates of the neighbours: orthogonal projection on the tangent plane
+        (the paper's choice) or projected direction rescaled to the chord length.
+    area : {"voronoi", "barycentric"}
+        Vertex area ``A_i`` (``igl.massmatrix`` type).
+    return_parts : bool
+        Also return ``B`` (3n x n, the stacked ``H_i S_i``) and the vertex areas ``A`` (n,).
+
+    Returns
+    -------
+    K : (n, n) scipy.sparse.csr_matrix of float64
+        Symmetric positive semidefinite; ``f^T K f ~ integral of ||Hess f||_F^2``.  Its null
+        space contains the constants and, on a flat chart, the two coordinates.
+        Unreferenced vertices give zero rows/columns.
+    B, A : only with ``return_parts``
+        ``K = B^T diag(repeat(A, 3)) B``.
+
+    Raises
+    ------
+    MeshError
+        On bad array shapes or indices.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.linspace(0, 1, 6), np.linspace(0, 1, 6))
+    >>> V = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    >>> i = np.arange(36).reshape(6, 6)[:-1, :-1].ravel()
+    >>> F = np.concatenate([np.stack([i, i + 1, i + 7], 1), np.stack([i, i + 7, i + 6], 1)])
+    >>> K = hlle_energy(V, F)
+    >>> bool(np.abs(K @ (2 * V[:, 0] - V[:, 1] + 3)).max() < 1e-8)
+    True
+    """
+    V, F = as_mesh_arrays(V, F, "hlle_energy")
+    n = V.shape[0]
+    if F.shape[0] == 0:
+        raise MeshError("hlle_energy: empty mesh (0 faces)")
+    if F.min() < 0 or F.max() >= n:
+        raise MeshError(f"hlle_energy: `F` indexes vertices outside 0..{n - 1}")
+    if coords not in ("projection", "chord"):
+        raise MeshError(f"hlle_energy: `coords` must be 'projection' or 'chord', got {coords!r}")
+    mtype = {
+        "voronoi": igl.MASSMATRIX_TYPE_VORONOI,
+        "barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
+    }.get(area)
+    if mtype is None:
+        raise MeshError(f"hlle_energy: `area` must be 'voronoi' or 'barycentric', got {area!r}")
+
+    Nb = vertex_neighborhoods(n, F, min_neighbors)
+    used = np.zeros(n, dtype=bool)
+    used[F.ravel()] = True
+    A = np.asarray(igl.massmatrix(V, F, mtype).diagonal()).ravel()
+    normals = _vertex_normals(V, F)
+    size = np.diff(Nb.indptr)
+
+    rows, cols, vals = [], [], []
+    for k in np.unique(size[used]).tolist():
+        if k < 2:
+            continue
+        verts = np.flatnonzero((size == k) & used)
+        for s in range(0, len(verts), _BATCH):
+            vb = verts[s : s + _BATCH]
+            idx = Nb.indices[Nb.indptr[vb][:, None] + np.arange(k)[None, :]]  # (b, k) sorted
+            # Put the centre first (it is somewhere in the sorted row).
+            pos = np.argmax(idx == vb[:, None], axis=1)
+            idx[np.arange(len(vb)), pos] = idx[:, 0]
+            idx[:, 0] = vb
+            P = V[idx] - V[vb][:, None, :]
+            H = _local_hessian_rows(P, normals[vb], coords)  # (b, 3, k)
+            r = (3 * vb[:, None, None] + np.arange(3)[None, :, None]) * np.ones((1, 1, k), int)
+            c = np.broadcast_to(idx[:, None, :], H.shape)
+            rows.append(r.ravel())
+            cols.append(c.ravel())
+            vals.append(H.ravel())
+    if rows:
+        B = sp.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(3 * n, n)
+        )
+    else:
+        B = sp.csr_matrix((3 * n, n))
+    W = sp.diags(np.repeat(A, 3).astype(np.float64))
+    K = (B.T @ W @ B).tocsr()
+    K = (0.5 * (K + K.T)).tocsr()  # exact symmetry against rounding in the product
+    if return_parts:
+        return K, B, A
+    return K
+
+
+def curved_hessian_energy(V: ArrayLike, F: ArrayLike) -> sp.csr_matrix:
+    """libigl's curved Hessian energy (Stein, Jacobson, Wardetzky, Grinspun 2020).
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions.
+    F : (m, 3) array_like of int
+        Triangles.
+
+    Returns
+    -------
+    K : (n, n) scipy.sparse.csr_matrix of float64
+        Symmetric (symmetrised against rounding) positive semidefinite; its null space on a
+        developable chart contains the constants and the intrinsic coordinates ``(s, t)``.
+
+    Raises
+    ------
+    MeshError
+        On bad array shapes or indices.
+    """
+    V, F = as_mesh_arrays(V, F, "curved_hessian_energy")
+    n = V.shape[0]
+    if F.shape[0] == 0 or F.min() < 0 or F.max() >= n:
+        raise MeshError(f"curved_hessian_energy: `F` is empty or indexes outside 0..{n - 1}")
+    try:
+        K = igl.curved_hessian_energy(V, F)
+    except RuntimeError as exc:  # pragma: no cover - libigl failure
+        raise MeshError(f"curved_hessian_energy: libigl failed: {exc}") from None
+    K = sp.csr_matrix(K)
+    return (0.5 * (K + K.T)).tocsr()
+
+
+def hessian_energy(
+    V: ArrayLike, F: ArrayLike, energy: Literal["hlle", "curved"] = "hlle", **kwargs
+) -> sp.csr_matrix:
+    """Dispatch to :func:`hlle_energy` (``"hlle"``) or :func:`curved_hessian_energy`.
+
+    Returns
+    -------
+    K : (n, n) scipy.sparse.csr_matrix
+        Symmetric positive semidefinite Hessian energy.
+    """
+    if energy == "hlle":
+        return hlle_energy(V, F, **kwargs)
+    if energy == "curved":
+        return curved_hessian_energy(V, F)
+    raise MeshError(f"hessian_energy: `energy` must be 'hlle' or 'curved', got {energy!r}")

@@ -1,0 +1,762 @@
+"""Parameterize disk charts: Hessian eigenmaps, certified bijectivity, fallbacks, baselines.
+
+Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
+
+1. The chart must be a topological disk (one face component, one boundary loop, chi = 1);
+   cut it first otherwise.  It is translated and scaled to unit area for the numerics; the
+   map is scaled back at the end.
+2. Hessian energy ``K`` (:mod:`igl_heatseg.hessian`, ``"hlle"`` or ``"curved"``) and the Voronoi
+   mass matrix ``M``; lowest eigenpairs of ``K y = lambda M y`` (shift-invert Lanczos with a
+   slightly negative shift, dense ``eigh`` on small charts).  The constant is removed by
+   M-centring the eigenvectors and dropping the direction it occupied.
+3. Gram (affine) correction.  The eigenvectors ``Y`` are an affine image of an isometric
+   layout, so ``l_e^2 ~ d_e^T G d_e`` for every edge ``e`` (``d_e`` the edge in eigen
+   coordinates, ``G`` symmetric).  ``G`` is fitted by least squares with relative weights
+   (equations divided by ``l_e^2``) and the map is ``Y G^(1/2)``.  When the numerical null space
+   has dimension ``d > 2`` (eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny charts) the same
+   fit is done for a ``d x d`` ``G`` over all ``d`` null vectors and its best rank-2 part is used,
+   which reduces to the 2 x 2 correction when ``d = 2``.
+4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
+   is turned over (``u -> -u``), not counted as flipped.
+5. If not bijective: a Tutte map (uniform weights, boundary on a circle by arc length) is
+   bijective by construction (Floyd/Tutte); it is improved by SLIM (symmetric Dirichlet, free
+   boundary) and the improvement is kept only if the certificate still says bijective.
+
+Distortion measures (:func:`distortion`), all after a global scale normalisation that makes the
+total image area equal the total 3D area; per-triangle Jacobian ``J`` (3D triangle in its own
+isometric 2D frame -> image) with singular values ``s1 >= s2``, averages weighted by 3D area:
+
+- ``conformal_mean`` / ``conformal_max``: ``s1 / s2`` (1 = conformal).
+- ``area_mean`` / ``area_max``: ``max(s1 s2, 1 / (s1 s2))`` (1 = area preserving).
+- ``sym_dirichlet``: ``s1^2 + s1^-2 + s2^2 + s2^-2`` (4 = isometry).
+- ``stretch_max``: ``max(s1, 1 / s2)`` over triangles (1 = isometry).
+
+Degenerate image triangles give ``inf``.  Flipped triangles use ``|det J|`` (flips are counted
+by the certificate, not here).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Iterable, Literal, Sequence
+
+import igl
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import ArrayLike
+
+from .bijectivity import Certificate, certify_map
+from .checks import as_mesh_arrays
+from .errors import MeshError
+from .hessian import curved_hessian_energy, hlle_energy
+from .topology import boundary_loops, face_components
+
+__all__ = [
+    "ChartParam",
+    "parameterize_chart",
+    "map_chart",
+    "hessian_map",
+    "gram_correction",
+    "tutte_map",
+    "distortion",
+    "compare_methods",
+    "METHODS",
+    "NULLSPACE_TOL",
+    "EIGEN_SHIFT",
+    "DENSE_EIGEN_MAX",
+]
+
+log = logging.getLogger(__name__)
+
+#: Generalized eigenvalues (chart scaled to unit area) at or below this are "null": such
+#: eigenvectors join the Gram fit (null space of dimension > 2).
+NULLSPACE_TOL: float = 1e-8
+
+#: Shift of the shift-invert Lanczos solve, ``sigma = -EIGEN_SHIFT`` (unit-area chart): just
+#: below the zero eigenvalues so that ``K - sigma M`` is positive definite.
+EIGEN_SHIFT: float = 1e-6
+
+#: Charts with at most this many vertices use a dense generalized eigen-solve.
+DENSE_EIGEN_MAX: int = 600
+
+#: Eigenpairs computed beyond the constant and the two coordinates (to detect a larger null
+#: space).
+EXTRA_EIGENPAIRS: int = 3
+
+#: Largest null-space dimension used in the generalized Gram fit.
+MAX_NULL_DIM: int = 6
+
+#: SLIM iterations of the Tutte fallback's improvement.
+SLIM_ITERATIONS: int = 30
+
+#: Methods known to :func:`map_chart`.
+METHODS: tuple[str, ...] = (
+    "hessian-hlle",
+    "hessian-curved",
+    "tutte",
+    "tutte+slim",
+    "harmonic",
+    "lscm",
+    "arap",
+)
+
+
+@dataclass
+class ChartParam:
+    """A chart's map to the plane and how good it is.
+
+    Attributes
+    ----------
+    UV : (n, 2) float64
+        Image of every vertex of the input ``V`` (``NaN`` rows for vertices ``F`` does not use).
+        Counter-clockwise image orientation when the map is bijective (mirror undone).
+    method : str
+        What produced ``UV``: ``"hessian-hlle"``, ``"hessian-curved"``, ``"tutte"``,
+        ``"tutte+slim"``, ``"harmonic"``, ``"lscm"``, ``"arap"``.
+    bijective : bool
+        Certificate verdict for ``UV``.
+    flips, overlaps : int
+        Flipped triangles and intersecting boundary-edge pairs of ``UV``.
+    distortion : dict
+        See :func:`distortion`.
+    seconds : float
+        Wall time of the whole call (all attempts).
+    eigenvalues : (k,) float64 or None
+        Lowest generalized eigenvalues of the Hessian attempt (unit-area chart), constant
+        included; ``None`` when no Hessian map was tried.
+    certificate : Certificate
+        Full certificate of ``UV``.
+    attempts : list of dict
+        Every map tried, in order: method, bijective, flips, overlaps, seconds.
+    fallback_used : bool
+        True when the requested Hessian map failed the certificate and a fallback was used.
+    """
+
+    UV: np.ndarray
+    method: str
+    bijective: bool
+    flips: int
+    overlaps: int
+    distortion: dict
+    seconds: float
+    eigenvalues: np.ndarray | None = None
+    certificate: Certificate | None = field(default=None, repr=False)
+    attempts: list = field(default_factory=list)
+    fallback_used: bool = False
+
+    def summary(self) -> dict:
+        """JSON-ready summary (no arrays except short eigenvalue lists)."""
+        return {
+            "method": self.method,
+            "bijective": bool(self.bijective),
+            "flips": int(self.flips),
+            "overlaps": int(self.overlaps),
+            "degenerate": int(self.certificate.degenerate) if self.certificate else None,
+            "fallback_used": bool(self.fallback_used),
+            "distortion": {k: float(v) for k, v in self.distortion.items()},
+            "seconds": float(self.seconds),
+            "eigenvalues": None if self.eigenvalues is None else self.eigenvalues.tolist(),
+            "attempts": self.attempts,
+        }
+
+
+# --------------------------------------------------------------------------- input
+
+
+def _prepare_chart(V: ArrayLike, F: ArrayLike, name: str):
+    """Check a disk chart; return compacted, unit-area normalised arrays and the maps back."""
+    V, F = as_mesh_arrays(V, F, name)
+    n = V.shape[0]
+    if F.shape[0] == 0:
+        raise MeshError(f"{name}: empty chart (0 faces)")
+    if F.min() < 0 or F.max() >= n:
+        raise MeshError(f"{name}: `F` indexes vertices outside 0..{n - 1}")
+    used = np.unique(F)
+    if not np.all(np.isfinite(V[used])):
+        raise MeshError(f"{name}: NaN or infinite vertex coordinates")
+    remap = np.full(n, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    Fc = remap[F]
+    Vc = V[used]
+    ncomp, _ = face_components(Fc)
+    loops = boundary_loops(Fc)
+    nv = len(used)
+    ne = len(np.unique(np.sort(np.concatenate([Fc[:, [0, 1]], Fc[:, [1, 2]], Fc[:, [2, 0]]]), 1),
+                       axis=0))
+    chi = nv - ne + Fc.shape[0]
+    if ncomp != 1 or len(loops) != 1 or chi != 1:
+        raise MeshError(
+            f"{name}: not a topological disk ({ncomp} face component(s), {len(loops)} boundary "
+            f"loop(s), Euler characteristic {chi}; a disk has 1, 1, 1): cut it to a disk first"
+        )
+    dblA = np.linalg.norm(np.cross(Vc[Fc[:, 1]] - Vc[Fc[:, 0]], Vc[Fc[:, 2]] - Vc[Fc[:, 0]]), axis=1)
+    area = 0.5 * dblA.sum()
+    if not area > 0:
+        raise MeshError(f"{name}: chart has zero area")
+    scale = 1.0 / np.sqrt(area)
+    Vn = (Vc - Vc.mean(axis=0)) * scale
+    return Vn, Fc, used, scale, loops[0]
+
+
+def _expand(UVc: np.ndarray, used: np.ndarray, n: int) -> np.ndarray:
+    UV = np.full((n, 2), np.nan)
+    UV[used] = UVc
+    return UV
+
+
+def _edges(F: np.ndarray) -> np.ndarray:
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    return np.unique(np.sort(E, axis=1), axis=0)
+
+
+# --------------------------------------------------------------------------- Hessian map
+
+
+def _mass_diagonal(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    m = np.asarray(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).diagonal()).ravel()
+    if not np.all(m > 0):
+        m = np.asarray(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_BARYCENTRIC).diagonal()).ravel()
+    return m
+
+
+def _lowest_eigenpairs(K: sp.spmatrix, m: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest ``k`` eigenpairs of ``K y = lambda diag(m) y`` (eigenvectors M-orthonormal)."""
+    n = K.shape[0]
+    k = min(k, n)
+    if n <= DENSE_EIGEN_MAX:
+        lam, Y = sla.eigh(K.toarray(), np.diag(m))
+        return lam[:k], Y[:, :k]
+    M = sp.diags(m).tocsc()
+    try:
+        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", tol=0.0)
+    except (RuntimeError, spla.ArpackNoConvergence) as exc:
+        log.warning("eigsh failed (%s); retrying with LOBPCG", exc)
+        rng = np.random.default_rng(0)
+        X0 = rng.standard_normal((n, k))
+        P = spla.LinearOperator(
+            (n, n), matvec=spla.factorized((K + EIGEN_SHIFT * M).tocsc()), dtype=np.float64
+        )
+        lam, Y = spla.lobpcg(K, X0, B=M, M=P, largest=False, tol=1e-10, maxiter=500)
+    order = np.argsort(lam)
+    return lam[order], Y[:, order]
+
+
+def gram_correction(Y: np.ndarray, V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Affine (Gram) correction of eigen-coordinates to an isometric-as-possible layout.
+
+    Fits a symmetric ``G`` (d x d) with ``l_e^2 ~ d_e^T G d_e`` over the edges (least squares,
+    each equation divided by ``l_e^2``) and returns ``Y C`` with ``C C^T`` the best rank-2
+    positive part of ``G`` (``C = G^(1/2)`` for ``d = 2``, up to a rotation).
+
+    Parameters
+    ----------
+    Y : (n, d) float64
+        Eigen-coordinates, ``d >= 2``.
+    V : (n, 3) float64
+        Vertex positions (edge lengths ``l_e``).
+    F : (m, 3) int64
+        Triangles.
+
+    Returns
+    -------
+    UV : (n, 2) float64
+        Corrected coordinates (unit: those of ``V``).
+    G : (d, d) float64
+        The fitted Gram matrix.
+    """
+    E = _edges(F)
+    D = Y[E[:, 1]] - Y[E[:, 0]]  # (ne, d)
+    l2 = ((V[E[:, 1]] - V[E[:, 0]]) ** 2).sum(axis=1)
+    d = Y.shape[1]
+    iu, ju = np.triu_indices(d)
+    coef = D[:, iu] * D[:, ju] * np.where(iu == ju, 1.0, 2.0)[None, :]
+    w = 1.0 / l2
+    sol, *_ = np.linalg.lstsq(coef * w[:, None], l2 * w, rcond=None)
+    G = np.zeros((d, d))
+    G[iu, ju] = sol
+    G[ju, iu] = sol
+    gl, gv = np.linalg.eigh(G)
+    top = np.argsort(gl)[::-1][:2]
+    gl2 = np.maximum(gl[top], 0.0)
+    C = gv[:, top] * np.sqrt(gl2)[None, :]
+    return Y @ C, G
+
+
+def hessian_map(
+    V: np.ndarray,
+    F: np.ndarray,
+    energy: Literal["hlle", "curved"] = "hlle",
+    **energy_kwargs,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Hessian eigenmap of a (unit-area, disk) chart, Gram-corrected.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Compact chart vertices (every vertex used by ``F``).
+    F : (m, 3) int64
+        Triangles.
+    energy : {"hlle", "curved"}
+        :func:`~igl_heatseg.hessian.hlle_energy` or
+        :func:`~igl_heatseg.hessian.curved_hessian_energy`.
+
+    Returns
+    -------
+    UV : (n, 2) float64
+        Layout, not yet certified, orientation arbitrary.
+    eigenvalues : (k,) float64
+        Lowest generalized eigenvalues (the constant's included).
+    null_dim : int
+        Number of non-constant eigenvectors used in the Gram fit (2, or more when the
+        numerical null space is larger).
+    """
+    n = V.shape[0]
+    if energy == "hlle":
+        K = hlle_energy(V, F, **energy_kwargs)
+    elif energy == "curved":
+        K = curved_hessian_energy(V, F)
+    else:
+        raise MeshError(f"hessian_map: `energy` must be 'hlle' or 'curved', got {energy!r}")
+    m = _mass_diagonal(V, F)
+    lam, Y = _lowest_eigenpairs(K, m, 3 + EXTRA_EIGENPAIRS)
+    null = int(np.count_nonzero(lam <= NULLSPACE_TOL))
+    keep = min(max(3, null), MAX_NULL_DIM + 1, n)
+    Yk = Y[:, :keep]
+    # Remove the constant: M-centre, then keep the keep-1 dominant directions (M-weighted).
+    Yk = Yk - (m @ Yk)[None, :] / m.sum()
+    sq = np.sqrt(m)[:, None]
+    U, s, Wt = np.linalg.svd(sq * Yk, full_matrices=False)
+    basis = U[:, : keep - 1] / sq
+    if keep - 1 < 2:
+        basis = np.column_stack([basis, np.zeros(n)])
+    UV, _ = gram_correction(basis, V, F)
+    return UV, lam, keep - 1
+
+
+# --------------------------------------------------------------------------- fallbacks
+
+
+def _circle_boundary(V: np.ndarray, bnd: np.ndarray) -> np.ndarray:
+    """Boundary vertices on the unit circle, spacing by arc length, counter-clockwise."""
+    seg = np.linalg.norm(V[np.roll(bnd, -1)] - V[bnd], axis=1)
+    t = np.concatenate([[0.0], np.cumsum(seg)[:-1]]) / seg.sum()
+    ang = 2.0 * np.pi * t
+    return np.stack([np.cos(ang), np.sin(ang)], axis=1)
+
+
+def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np.ndarray:
+    """Tutte embedding: uniform-weight harmonic map with the boundary on a circle.
+
+    Bijective by construction for a triangulated disk (the boundary polygon is strictly
+    convex), up to floating-point rounding of the linear solve.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Vertices (only the boundary's arc length is used).
+    F : (m, 3) int64
+        Disk triangulation using every vertex.
+    bnd : (b,) int64, optional
+        Ordered boundary loop (surface on the left); computed when omitted.
+
+    Returns
+    -------
+    UV : (n, 2) float64
+        Counter-clockwise image in the unit disk.
+    """
+    n = V.shape[0]
+    if bnd is None:
+        bnd = boundary_loops(F)[0]
+    E = _edges(F)
+    A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+                      shape=(n, n))
+    L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
+    UV = np.zeros((n, 2))
+    UV[bnd] = _circle_boundary(V, bnd)
+    inner = np.setdiff1d(np.arange(n), bnd)
+    if len(inner):
+        LII = L[inner][:, inner].tocsc()
+        rhs = -(L[inner][:, bnd] @ UV[bnd])
+        solve = spla.factorized(LII)
+        UV[inner, 0] = solve(rhs[:, 0])
+        UV[inner, 1] = solve(rhs[:, 1])
+    return UV
+
+
+def _slim(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int,
+          energy=None) -> np.ndarray:
+    """SLIM (libigl) from a flip-free start, free boundary."""
+    if energy is None:
+        energy = igl.MappingEnergyType.SYMMETRIC_DIRICHLET
+    data = igl.slim_precompute(
+        np.asfortranarray(V),
+        np.asfortranarray(F.astype(np.int32)),
+        np.asfortranarray(UV0),
+        energy,
+        np.zeros(0, dtype=np.int32),
+        np.zeros((0, 2), order="F"),
+        0.0,
+    )
+    return np.ascontiguousarray(igl.slim_solve(data, iterations)[:, :2])
+
+
+def _harmonic(V, F, bnd):
+    return igl.harmonic(V, F, bnd, _circle_boundary(V, bnd), 1)
+
+
+def _lscm(V, F, bnd):
+    # Two boundary vertices far apart, fixed at (0,0) and (|p-q|, 0).
+    P = V[bnd]
+    i = int(np.argmax(((P - P[0]) ** 2).sum(1)))
+    j = int(np.argmax(((P - P[i]) ** 2).sum(1)))
+    b = np.array([bnd[i], bnd[j]], dtype=np.int64)
+    bc = np.array([[0.0, 0.0], [np.linalg.norm(P[i] - P[j]), 0.0]])
+    UV, _ = igl.lscm(V, F, b, bc)
+    return UV
+
+
+def _arap(V, F, bnd, iterations=20):
+    UV0 = _harmonic(V, F, bnd)
+    data = igl.ARAPData()
+    data.with_dynamics = True
+    data.max_iter = iterations
+    igl.arap_precomputation(V, F, 2, np.zeros(0, dtype=np.int32), data)
+    return igl.arap_solve(np.zeros((0, 2)), data, UV0)
+
+
+# --------------------------------------------------------------------------- distortion
+
+
+def distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> dict:
+    """Angle, area and isometric distortion of a map (definitions in the module docstring).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        3D vertices.
+    F : (m, 3) int64
+        Triangles.
+    UV : (n, 2) float64
+        Map; its global scale is normalised away (total image area := total 3D area).
+
+    Returns
+    -------
+    dict
+        ``conformal_mean``, ``conformal_max``, ``area_mean``, ``area_max``, ``sym_dirichlet``,
+        ``stretch_max`` (floats, ``inf`` when a triangle's image is degenerate).
+    """
+    P0, P1, P2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    e1 = P1 - P0
+    e2 = P2 - P0
+    l1 = np.linalg.norm(e1, axis=1)
+    x = e1 / l1[:, None]
+    e2x = (e2 * x).sum(axis=1)
+    e2y = np.linalg.norm(e2 - e2x[:, None] * x, axis=1)
+    a3 = 0.5 * l1 * e2y
+    W1 = UV[F[:, 1]] - UV[F[:, 0]]
+    W2 = UV[F[:, 2]] - UV[F[:, 0]]
+    auv = 0.5 * np.abs(W1[:, 0] * W2[:, 1] - W1[:, 1] * W2[:, 0])
+    s = np.sqrt(a3.sum() / auv.sum()) if auv.sum() > 0 else 1.0
+    W1 = W1 * s
+    W2 = W2 * s
+    # J [l1 e2x; 0 e2y] = [W1 W2]  =>  J = [W1 W2] inv(Q)
+    Q = np.zeros((len(F), 2, 2))
+    Q[:, 0, 0] = l1
+    Q[:, 0, 1] = e2x
+    Q[:, 1, 1] = e2y
+    Wm = np.stack([W1, W2], axis=2)  # columns W1, W2
+    J = Wm @ np.linalg.inv(Q)
+    sig = np.linalg.svd(J, compute_uv=False)
+    s1, s2 = sig[:, 0], sig[:, 1]
+    w = a3 / a3.sum()
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        conf = np.where(s2 > 0, s1 / s2, np.inf)
+        det = s1 * s2
+        area = np.where(det > 0, np.maximum(det, 1.0 / det), np.inf)
+        sd = np.where(s2 > 0, s1**2 + s1**-2.0 + s2**2 + s2**-2.0, np.inf)
+        stretch = np.where(s2 > 0, np.maximum(s1, 1.0 / s2), np.inf)
+        return {
+            "conformal_mean": float((w * conf).sum()),
+            "conformal_max": float(conf.max()),
+            "area_mean": float((w * area).sum()),
+            "area_max": float(area.max()),
+            "sym_dirichlet": float((w * sd).sum()),
+            "stretch_max": float(stretch.max()),
+        }
+
+
+# --------------------------------------------------------------------------- entry points
+
+
+def _finish(UVc, Vn, Fc, name):
+    """Certify, undo a mirror image, certify again if mirrored."""
+    cert = certify_map(UVc, Fc, name=name)
+    if cert.mirrored:
+        UVc = UVc * np.array([-1.0, 1.0])
+        cert = certify_map(UVc, Fc, name=name)
+    return UVc, cert
+
+
+def _run(method: str, Vn, Fc, bnd, name, energy_kwargs) -> tuple[np.ndarray, np.ndarray | None]:
+    lam = None
+    if method == "hessian-hlle":
+        UVc, lam, _ = hessian_map(Vn, Fc, "hlle", **energy_kwargs)
+    elif method == "hessian-curved":
+        UVc, lam, _ = hessian_map(Vn, Fc, "curved")
+    elif method == "tutte":
+        UVc = tutte_map(Vn, Fc, bnd)
+    elif method == "tutte+slim":
+        UVc = _slim(Vn, Fc, tutte_map(Vn, Fc, bnd), SLIM_ITERATIONS)
+    elif method == "harmonic":
+        UVc = _harmonic(Vn, Fc, bnd)
+    elif method == "lscm":
+        UVc = _lscm(Vn, Fc, bnd)
+    elif method == "arap":
+        UVc = _arap(Vn, Fc, bnd)
+    else:
+        raise MeshError(f"{name}: unknown method {method!r}; known: {', '.join(METHODS)}")
+    return np.asarray(UVc, dtype=np.float64), lam
+
+
+def map_chart(
+    V: ArrayLike,
+    F: ArrayLike,
+    method: str = "hessian-hlle",
+    *,
+    name: str = "chart",
+    **energy_kwargs,
+) -> ChartParam:
+    """Map a disk chart with one method, no fallback; certify it and measure distortion.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions (vertices not used by ``F`` are allowed and get ``NaN`` UVs).
+    F : (m, 3) array_like of int
+        Triangles of a topological disk, consistently oriented.
+    method : str
+        One of :data:`METHODS`.  ``"tutte+slim"`` keeps SLIM's result even if not bijective
+        (use :func:`parameterize_chart` for the guarded version).
+    name : str
+        Chart name for messages.
+    **energy_kwargs
+        Passed to :func:`~igl_heatseg.hessian.hlle_energy` for ``"hessian-hlle"``.
+
+    Returns
+    -------
+    ChartParam
+
+    Raises
+    ------
+    MeshError
+        Bad arrays, or the chart is not a disk.
+    """
+    t0 = time.perf_counter()
+    V_in = np.asarray(V)
+    Vn, Fc, used, scale, bnd = _prepare_chart(V, F, name)
+    try:
+        UVc, lam = _run(method, Vn, Fc, bnd, name, energy_kwargs)
+    except RuntimeError as exc:
+        raise MeshError(f"{name}: {method} failed in libigl/scipy: {exc}") from None
+    if not np.all(np.isfinite(UVc)):
+        UVc = np.nan_to_num(UVc, nan=0.0, posinf=0.0, neginf=0.0)
+    UVc, cert = _finish(UVc, Vn, Fc, name)
+    dist = distortion(Vn, Fc, UVc)
+    secs = time.perf_counter() - t0
+    return ChartParam(
+        UV=_expand(UVc / scale, used, V_in.shape[0]),
+        method=method,
+        bijective=cert.bijective,
+        flips=cert.flips,
+        overlaps=cert.overlaps,
+        distortion=dist,
+        seconds=secs,
+        eigenvalues=lam,
+        certificate=cert,
+        attempts=[{"method": method, **cert.summary(), "seconds": secs}],
+    )
+
+
+def parameterize_chart(
+    V: ArrayLike,
+    F: ArrayLike,
+    energy: Literal["hlle", "curved"] = "hlle",
+    *,
+    fallback: Literal["tutte+slim", "tutte", "none"] = "tutte+slim",
+    slim_iterations: int = SLIM_ITERATIONS,
+    name: str = "chart",
+    **energy_kwargs,
+) -> ChartParam:
+    """Hessian eigenmap of a disk chart with certified bijectivity and a bijective fallback.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertex positions (vertices not used by ``F`` get ``NaN`` UVs).
+    F : (m, 3) array_like of int
+        Triangles of a topological disk (1 component, 1 boundary loop, chi = 1), consistently
+        oriented.  Any size from one triangle up.
+    energy : {"hlle", "curved"}
+        Hessian energy: the paper's HLLE (:func:`~igl_heatseg.hessian.hlle_energy`) or libigl's
+        curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`).
+    fallback : {"tutte+slim", "tutte", "none"}
+        What to do when the Hessian map is not bijective: a Tutte map (bijective by
+        construction), optionally improved by SLIM and the improvement kept only if still
+        bijective; or nothing (return the non-bijective Hessian map, flagged).
+    slim_iterations : int
+        SLIM iterations for ``"tutte+slim"``.
+    name : str
+        Chart name for messages.
+    **energy_kwargs
+        Passed to :func:`~igl_heatseg.hessian.hlle_energy`.
+
+    Returns
+    -------
+    ChartParam
+        ``method`` is ``"hessian-hlle"``/``"hessian-curved"`` when the Hessian map is bijective,
+        else ``"tutte"`` or ``"tutte+slim"`` (``fallback_used=True``); ``attempts`` lists every
+        map tried with its certificate.  ``UV`` is in the units of ``V`` (Hessian maps are
+        isometric-as-possible; the Tutte fallback is scaled to the chart's area).
+
+    Raises
+    ------
+    MeshError
+        Bad arrays, the chart is not a disk, or an unknown ``energy``/``fallback``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.arange(5.0), np.arange(4.0))
+    >>> V = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    >>> i = np.arange(20).reshape(4, 5)[:-1, :-1].ravel()
+    >>> F = np.concatenate([np.stack([i, i + 1, i + 6], 1), np.stack([i, i + 6, i + 5], 1)])
+    >>> res = parameterize_chart(V, F)
+    >>> res.method, res.bijective, round(res.distortion["sym_dirichlet"], 6)
+    ('hessian-hlle', True, 4.0)
+    """
+    if energy not in ("hlle", "curved"):
+        raise MeshError(f"{name}: `energy` must be 'hlle' or 'curved', got {energy!r}")
+    if fallback not in ("tutte+slim", "tutte", "none"):
+        raise MeshError(
+            f"{name}: `fallback` must be 'tutte+slim', 'tutte' or 'none', got {fallback!r}"
+        )
+    t0 = time.perf_counter()
+    n_in = np.asarray(V).shape[0] if np.ndim(V) == 2 else 0
+    Vn, Fc, used, scale, bnd = _prepare_chart(V, F, name)
+    attempts = []
+    method = f"hessian-{energy}"
+
+    t = time.perf_counter()
+    try:
+        UVc, lam, null_dim = hessian_map(Vn, Fc, energy, **energy_kwargs)
+        ok = bool(np.all(np.isfinite(UVc)))
+    except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
+        if isinstance(exc, MeshError):
+            raise
+        log.warning("%s: %s eigen-solve failed: %s", name, method, exc)
+        UVc, lam, null_dim, ok = np.zeros((Vn.shape[0], 2)), None, 0, False
+    if ok:
+        UVc, cert = _finish(UVc, Vn, Fc, name)
+        attempts.append({"method": method, **cert.summary(), "null_dim": null_dim,
+                         "seconds": time.perf_counter() - t})
+    else:
+        cert = None
+        attempts.append({"method": method, "bijective": False, "error": "eigen-solve failed",
+                         "seconds": time.perf_counter() - t})
+    used_fallback = False
+    if (cert is None or not cert.bijective) and fallback != "none":
+        used_fallback = True
+        if cert is not None:
+            log.info("%s: %s not bijective (flips %d, overlaps %d, degenerate %d, wound %d); "
+                     "falling back to %s", name, method, cert.flips, cert.overlaps,
+                     cert.degenerate, cert.wound, fallback)
+        t = time.perf_counter()
+        UVt = tutte_map(Vn, Fc, bnd)
+        UVt, cert_t = _finish(UVt, Vn, Fc, name)
+        attempts.append({"method": "tutte", **cert_t.summary(), "seconds": time.perf_counter() - t})
+        UVc, cert, method = UVt, cert_t, "tutte"
+        if fallback == "tutte+slim" and cert_t.bijective and slim_iterations > 0:
+            t = time.perf_counter()
+            try:
+                UVs = _slim(Vn, Fc, UVt, slim_iterations)
+                good = bool(np.all(np.isfinite(UVs)))
+            except RuntimeError as exc:  # pragma: no cover - libigl failure
+                log.warning("%s: SLIM failed: %s", name, exc)
+                good = False
+            if good:
+                UVs, cert_s = _finish(UVs, Vn, Fc, name)
+                attempts.append({"method": "tutte+slim", **cert_s.summary(),
+                                 "seconds": time.perf_counter() - t})
+                if cert_s.bijective:
+                    UVc, cert, method = UVs, cert_s, "tutte+slim"
+        if not cert.bijective:
+            log.warning("%s: fallback map is not bijective either (%s)", name, cert.summary())
+        if method == "tutte":  # arbitrary scale: match the chart's area
+            a = 0.5 * np.abs(
+                np.cross(UVc[Fc[:, 1]] - UVc[Fc[:, 0]], UVc[Fc[:, 2]] - UVc[Fc[:, 0]])
+            ).sum()
+            UVc = UVc / np.sqrt(a)
+    elif cert is None:
+        UVc, cert = _finish(UVc, Vn, Fc, name)
+    dist = distortion(Vn, Fc, UVc)
+    return ChartParam(
+        UV=_expand(UVc / scale, used, n_in),
+        method=method,
+        bijective=cert.bijective,
+        flips=cert.flips,
+        overlaps=cert.overlaps,
+        distortion=dist,
+        seconds=time.perf_counter() - t0,
+        eigenvalues=lam,
+        certificate=cert,
+        attempts=attempts,
+        fallback_used=used_fallback,
+    )
+
+
+def compare_methods(
+    charts: Iterable[tuple[str, np.ndarray, np.ndarray]],
+    methods: Sequence[str] = ("hessian-hlle", "hessian-curved", "harmonic", "lscm"),
+) -> list[dict]:
+    """Run several parameterization methods on disk charts; one table row per (chart, method).
+
+    Every method goes through the same certificate and distortion code, without fallback.
+
+    Parameters
+    ----------
+    charts : iterable of (name, V, F)
+        Disk charts.
+    methods : sequence of str
+        Names from :data:`METHODS`.
+
+    Returns
+    -------
+    rows : list of dict
+        Keys ``chart, faces, method, bijective, flips, overlaps, degenerate, conformal_mean,
+        conformal_max, area_mean, area_max, sym_dirichlet, stretch_max, seconds`` (and
+        ``error`` when a method raised).
+    """
+    rows = []
+    for cname, V, F in charts:
+        for method in methods:
+            row = {"chart": cname, "faces": int(np.shape(F)[0]), "method": method}
+            try:
+                res = map_chart(V, F, method, name=str(cname))
+            except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
+                row.update({"bijective": False, "error": str(exc)})
+                rows.append(row)
+                continue
+            row.update({
+                "bijective": res.bijective,
+                "flips": res.flips,
+                "overlaps": res.overlaps,
+                "degenerate": res.certificate.degenerate,
+                **res.distortion,
+                "seconds": res.seconds,
+            })
+            rows.append(row)
+    return rows

@@ -1,0 +1,445 @@
+"""Pack chart UV maps into one texture atlas in the unit square, and write OBJ files with UVs.
+
+Every chart map is assumed bijective already (see :mod:`igl_heatseg.bijectivity`); packing only
+moves charts rigidly (rotation + translation) and scales all of them by one common factor, so
+each chart keeps its orientation and its map stays bijective, and charts do not overlap each
+other because their (gutter-padded) bounding boxes do not.
+
+Packing: optional per-chart rescale so that UV area equals 3D area (charts from different
+methods may come in different units), rotation of each chart to its minimum-area bounding
+rectangle (rotating calipers on the convex hull, then "landscape"), and shelf packing of the
+boxes sorted by height, trying several shelf widths and keeping the squarest layout.  The
+result is normalised into ``[0, 1]^2`` with the common scale.
+
+OBJ conventions: indices are 1-based; ``f v/vt v/vt v/vt``; coordinates written with 17
+significant digits so that a re-read file gives back the same doubles.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import MeshError
+
+__all__ = [
+    "PackedAtlas",
+    "pack_charts",
+    "min_area_rotation",
+    "boxes_overlap",
+    "atlas_corner_uv",
+    "write_chart_obj",
+    "write_atlas_obj",
+    "GUTTER_DEFAULT",
+]
+
+log = logging.getLogger(__name__)
+
+#: Gap between chart boxes, as a fraction of the atlas side (2 texels at 1024 px ~ 0.002).
+GUTTER_DEFAULT: float = 0.004
+
+#: Shelf widths tried, as multiples of ``sqrt(sum of box areas)``.
+_SHELF_WIDTH_FACTORS = np.linspace(0.7, 2.5, 37)
+
+#: UVs may exceed [0, 1] by this much from rounding before they are clipped.
+UV_ROUND_TOL: float = 1e-9
+
+
+@dataclass(frozen=True)
+class PackedAtlas:
+    """Charts packed into the unit square.
+
+    Attributes
+    ----------
+    uvs : list of (n_i, 2) float64
+        Packed UVs of each chart, all in ``[0, 1]^2``.
+    boxes : (k, 4) float64
+        Each chart's axis-aligned bounding box in the atlas, ``[u_min, v_min, u_max, v_max]``
+        (without gutter); boxes of different charts are at least the gutter apart.
+    scale : float
+        Common factor from (area-normalised, if ``areas`` was given) chart units to atlas units.
+    chart_scales : (k,) float64
+        Per-chart factor applied before ``scale`` (1 unless ``areas`` was given).
+    rotations : (k,) float64
+        Rotation applied to each chart (radians, counter-clockwise).
+    gutter : float
+        Gap between boxes in atlas units.
+    fill : float
+        Sum of chart UV areas in the atlas (how much of the unit square is used).
+    """
+
+    uvs: list
+    boxes: np.ndarray
+    scale: float
+    chart_scales: np.ndarray
+    rotations: np.ndarray
+    gutter: float
+    fill: float
+
+
+def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
+    a = UV[F[:, 1]] - UV[F[:, 0]]
+    b = UV[F[:, 2]] - UV[F[:, 0]]
+    return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
+
+
+def _hull(P: np.ndarray) -> np.ndarray:
+    """Convex hull (Andrew's monotone chain), counter-clockwise, no repeated point."""
+    P = np.unique(P, axis=0)
+    if len(P) < 3:
+        return P
+
+    def half(points):
+        out: list = []
+        for p in points:
+            while len(out) >= 2:
+                o, a = out[-2], out[-1]
+                if (a[0] - o[0]) * (p[1] - o[1]) - (a[1] - o[1]) * (p[0] - o[0]) > 0:
+                    break
+                out.pop()
+            out.append(p)
+        return out
+
+    pts = [tuple(p) for p in P]  # sorted lexicographically by np.unique
+    lower = half(pts)
+    upper = half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def min_area_rotation(UV: ArrayLike) -> float:
+    """Rotation angle that gives the minimum-area axis-aligned bounding box, width >= height.
+
+    Rotating calipers: the optimal rectangle has a side on a convex-hull edge.
+
+    Parameters
+    ----------
+    UV : (n, 2) array_like of float
+
+    Returns
+    -------
+    angle : float
+        Counter-clockwise angle (radians) to rotate the points by.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0, 0], [1, 1], [0.5, 1.5], [-0.5, 0.5]])  # a 45-degree rectangle
+    >>> round(float(abs(np.degrees(min_area_rotation(P))) % 90), 6)
+    45.0
+    """
+    P = np.asarray(UV, dtype=np.float64)
+    H = _hull(P)
+    if len(H) < 3:
+        angles = np.array([0.0])
+    else:
+        d = np.roll(H, -1, axis=0) - H
+        angles = -np.arctan2(d[:, 1], d[:, 0])
+    best, best_area = 0.0, np.inf
+    for t in angles:
+        c, s = np.cos(t), np.sin(t)
+        R = H @ np.array([[c, s], [-s, c]])
+        ext = R.max(axis=0) - R.min(axis=0)
+        area = ext[0] * ext[1]
+        if area < best_area * (1 - 1e-12):
+            best, best_area = float(t), area
+            best_ext = ext
+    if len(H) >= 2 and best_ext[1] > best_ext[0]:
+        best += np.pi / 2
+    return float(np.arctan2(np.sin(best), np.cos(best)))
+
+
+def _rotate(P: np.ndarray, t: float) -> np.ndarray:
+    c, s = np.cos(t), np.sin(t)
+    return P @ np.array([[c, s], [-s, c]])
+
+
+def _shelf(w: np.ndarray, h: np.ndarray, width: float) -> tuple[np.ndarray, float, float]:
+    """Shelf packing in the given order; returns offsets (k,2), used width, total height."""
+    xy = np.zeros((len(w), 2))
+    x = y = shelf_h = used_w = 0.0
+    for i in range(len(w)):
+        if x > 0 and x + w[i] > width:
+            y += shelf_h
+            x = shelf_h = 0.0
+        xy[i] = (x, y)
+        x += w[i]
+        shelf_h = max(shelf_h, h[i])
+        used_w = max(used_w, x)
+    return xy, used_w, y + shelf_h
+
+
+def pack_charts(
+    uvs: list,
+    faces: list,
+    areas: ArrayLike | None = None,
+    *,
+    gutter: float = GUTTER_DEFAULT,
+    rotate: bool = True,
+) -> PackedAtlas:
+    """Pack chart UV maps into ``[0, 1]^2`` without overlaps between charts.
+
+    Parameters
+    ----------
+    uvs : list of (n_i, 2) array_like of float
+        Each chart's UV coordinates (a bijective map; orientation is preserved).
+    faces : list of (m_i, 3) array_like of int
+        Each chart's triangles, indexing its ``uvs[i]``.
+    areas : (k,) array_like of float, optional
+        3D surface area of each chart.  When given, each chart is first scaled so its UV area
+        equals its 3D area, so relative sizes in the atlas follow the surface.  Otherwise the
+        charts' own UV units are kept (one common factor for all).
+    gutter : float
+        Gap between chart boxes as a fraction of the atlas side, ``0 <= gutter < 0.5``.
+    rotate : bool
+        Rotate each chart to its minimum-area bounding box.
+
+    Returns
+    -------
+    PackedAtlas
+
+    Raises
+    ------
+    MeshError
+        Mismatched lists, bad shapes, non-finite UVs, face indices out of range, a chart with
+        zero UV area, or bad ``areas``/``gutter``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sq = np.array([[0., 0], [1, 0], [1, 1], [0, 1]]); F = np.array([[0, 1, 2], [0, 2, 3]])
+    >>> atlas = pack_charts([sq, 2 * sq], [F, F])
+    >>> len(boxes_overlap(atlas.boxes))
+    0
+    >>> round(float(np.ptp(atlas.uvs[1][:, 0]) / np.ptp(atlas.uvs[0][:, 0])), 9)
+    2.0
+    """
+    if len(uvs) != len(faces):
+        raise MeshError(f"pack_charts: {len(uvs)} UV arrays but {len(faces)} face arrays")
+    if len(uvs) == 0:
+        raise MeshError("pack_charts: no charts to pack")
+    if not (0 <= gutter < 0.5):
+        raise MeshError(f"pack_charts: gutter must be in [0, 0.5), got {gutter}")
+    k = len(uvs)
+    P_list, F_list = [], []
+    for i, (UV, F) in enumerate(zip(uvs, faces, strict=True)):
+        UV = np.asarray(UV, dtype=np.float64)
+        F = np.asarray(F)
+        if UV.ndim != 2 or UV.shape[1] != 2:
+            raise MeshError(f"chart {i}: `uv` should have shape (n,2), shape is {UV.shape}")
+        if F.ndim != 2 or F.shape[1] != 3 or F.dtype.kind not in "iu":
+            raise MeshError(f"chart {i}: `F` should be (m,3) integers, got {F.shape} {F.dtype}")
+        if len(F) == 0:
+            raise MeshError(f"chart {i}: no faces")
+        if F.min() < 0 or F.max() >= len(UV):
+            raise MeshError(f"chart {i}: face indices outside 0..{len(UV) - 1}")
+        if not np.isfinite(UV).all():
+            raise MeshError(f"chart {i}: UVs contain NaN or infinite values")
+        P_list.append(UV)
+        F_list.append(F.astype(np.int64))
+    uv_area = np.array([_uv_area(P, F) for P, F in zip(P_list, F_list, strict=True)])
+    zero = np.flatnonzero(uv_area <= 0)
+    if len(zero):
+        raise MeshError(f"pack_charts: chart(s) {zero[:5].tolist()} have zero UV area")
+    if areas is None:
+        chart_scales = np.ones(k)
+    else:
+        areas = np.asarray(areas, dtype=np.float64).reshape(-1)
+        if areas.shape != (k,) or not (np.isfinite(areas).all() and (areas > 0).all()):
+            raise MeshError(f"pack_charts: `areas` must be {k} positive numbers")
+        chart_scales = np.sqrt(areas / uv_area)
+
+    rotations = np.zeros(k)
+    local = []
+    for i in range(k):
+        P = P_list[i] * chart_scales[i]
+        if rotate:
+            rotations[i] = min_area_rotation(P)
+            P = _rotate(P, rotations[i])
+        local.append(P - P.min(axis=0))
+    ext = np.array([P.max(axis=0) for P in local])  # (k, 2) box sizes
+    ext = np.maximum(ext, 1e-300)
+    # Gutter in chart units: a fraction of the (estimated) atlas side.
+    side0 = np.sqrt((ext[:, 0] * ext[:, 1]).sum())
+    g = gutter * side0 / max(1.0 - 2 * gutter, 1e-9)
+    w, h = ext[:, 0] + g, ext[:, 1] + g
+    order = np.lexsort((-w, -h))  # tallest first
+    best = None
+    for fac in _SHELF_WIDTH_FACTORS:
+        width = max(fac * np.sqrt((w * h).sum()), w.max())
+        xy, used_w, total_h = _shelf(w[order], h[order], width)
+        side = max(used_w, total_h)
+        if best is None or side < best[0] * (1 - 1e-12):
+            best = (side, xy)
+    side, xy_sorted = best
+    xy = np.empty_like(xy_sorted)
+    xy[order] = xy_sorted
+    # The whole layout (with a half gutter around every box) maps to [0, 1]^2.
+    scale = 1.0 / side
+    out, boxes = [], np.zeros((k, 4))
+    for i in range(k):
+        Q = (local[i] + xy[i] + g / 2) * scale
+        if Q.min() < -UV_ROUND_TOL or Q.max() > 1 + UV_ROUND_TOL:
+            raise RuntimeError(f"pack_charts: internal error, chart {i} left the unit square")
+        Q = np.clip(Q, 0.0, 1.0)
+        out.append(Q)
+        boxes[i] = [*Q.min(axis=0), *Q.max(axis=0)]
+    fill = float((uv_area * chart_scales**2).sum() * scale**2)
+    log.info("packed %d chart(s): fill %.1f %%, gutter %.3g", k, 100 * fill, g * scale)
+    return PackedAtlas(
+        uvs=out,
+        boxes=boxes,
+        scale=float(scale),
+        chart_scales=chart_scales,
+        rotations=rotations,
+        gutter=float(g * scale),
+        fill=fill,
+    )
+
+
+def boxes_overlap(boxes: ArrayLike, gap: float = 0.0) -> np.ndarray:
+    """Pairs of axis-aligned boxes that overlap or are closer than ``gap``.
+
+    Parameters
+    ----------
+    boxes : (k, 4) array_like of float
+        ``[x_min, y_min, x_max, y_max]`` per box.
+    gap : float
+        Boxes closer than this (in both axes) count as overlapping; touching boxes with
+        ``gap == 0`` do not.
+
+    Returns
+    -------
+    pairs : (p, 2) int64
+        ``i < j`` for each overlapping pair.
+    """
+    B = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    sep_x = (B[:, None, 0] >= B[None, :, 2] + gap) | (B[None, :, 0] >= B[:, None, 2] + gap)
+    sep_y = (B[:, None, 1] >= B[None, :, 3] + gap) | (B[None, :, 1] >= B[:, None, 3] + gap)
+    hit = ~(sep_x | sep_y)
+    i, j = np.nonzero(np.triu(hit, 1))
+    return np.stack([i, j], axis=1).astype(np.int64)
+
+
+def atlas_corner_uv(m: int, chart_faces: list, chart_F: list, uvs: list) -> np.ndarray:
+    """Per-corner UVs of the whole mesh from per-chart UVs.
+
+    Parameters
+    ----------
+    m : int
+        Face count of the whole mesh.
+    chart_faces : list of (m_i,) array_like of int
+        Which faces of the whole mesh chart ``i`` holds (its faces in order).
+    chart_F : list of (m_i, 3) array_like of int
+        Chart ``i``'s triangles on its own (cut) vertices, row ``r`` = whole-mesh face
+        ``chart_faces[i][r]`` with the same corner order.
+    uvs : list of (n_i, 2) array_like of float
+        Chart ``i``'s UV per (cut) vertex.
+
+    Returns
+    -------
+    corner_uv : (m, 3, 2) float64
+        ``corner_uv[f, j]`` = UV of corner ``j`` of face ``f``.
+
+    Raises
+    ------
+    MeshError
+        A face not covered by any chart, or covered twice.
+    """
+    out = np.full((m, 3, 2), np.nan)
+    count = np.zeros(m, dtype=np.int64)
+    for faces, F, UV in zip(chart_faces, chart_F, uvs, strict=True):
+        faces = np.asarray(faces, dtype=np.int64)
+        out[faces] = np.asarray(UV, dtype=np.float64)[np.asarray(F, dtype=np.int64)]
+        np.add.at(count, faces, 1)
+    bad = np.flatnonzero(count != 1)
+    if len(bad):
+        raise MeshError(
+            f"atlas: {len(bad)} face(s) are in {sorted(set(count[bad].tolist()))} charts "
+            f"instead of exactly one, e.g. faces {bad[:5].tolist()}"
+        )
+    return out
+
+
+def _check_write(V, F, n_name: str) -> tuple[np.ndarray, np.ndarray]:
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise MeshError(f"`V` should have shape (n,3), shape is {V.shape}")
+    if F.ndim != 2 or F.shape[1] != 3 or F.dtype.kind not in "iu":
+        raise MeshError(f"`F` should be (m,3) integers, got shape {F.shape} dtype {F.dtype}")
+    if F.size and (F.min() < 0 or F.max() >= len(V)):
+        raise MeshError(f"`F` has indices outside 0..{len(V) - 1} ({n_name})")
+    return V, F.astype(np.int64)
+
+
+def _write(path, header: str, V: np.ndarray, VT: np.ndarray, F: np.ndarray, FT: np.ndarray):
+    lines = [header]
+    lines += ["v %.17g %.17g %.17g" % tuple(r) for r in V.tolist()]
+    lines += ["vt %.17g %.17g" % tuple(r) for r in VT.tolist()]
+    I = np.stack([F + 1, FT + 1], axis=2).reshape(-1, 6)
+    lines += ["f %d/%d %d/%d %d/%d" % tuple(r) for r in I.tolist()]
+    with open(os.fspath(path), "w", encoding="ascii") as fh:
+        fh.write("\n".join(lines))
+        fh.write("\n")
+
+
+def write_chart_obj(path: str | os.PathLike, V: ArrayLike, F: ArrayLike, UV: ArrayLike) -> None:
+    """Write one chart as OBJ: ``v`` (3D positions), ``vt`` (its UV), ``f v/vt v/vt v/vt``.
+
+    Parameters
+    ----------
+    path : str or path-like
+    V : (n, 3) array_like of float
+        The chart's (cut) vertex positions.
+    F : (m, 3) array_like of int
+        Triangles, 0-based (written 1-based).
+    UV : (n, 2) array_like of float
+        One UV per vertex (``vt`` index = ``v`` index).
+
+    Raises
+    ------
+    MeshError
+        Mismatched shapes or out-of-range indices.
+    """
+    V, F = _check_write(V, F, "chart")
+    UV = np.asarray(UV, dtype=np.float64)
+    if UV.shape != (V.shape[0], 2):
+        raise MeshError(f"`UV` should have shape ({V.shape[0]},2), shape is {UV.shape}")
+    _write(path, "# igl_heatseg chart: v = 3D position, vt = chart UV", V, UV, F, F)
+
+
+def write_atlas_obj(
+    path: str | os.PathLike, V_input: ArrayLike, F_input: ArrayLike, corner_uv: ArrayLike
+) -> None:
+    """Write the whole mesh with per-corner UVs (one ``vt`` per distinct corner UV).
+
+    Vertices and faces are written in the input's order, so the OBJ's faces line up with
+    ``F_input`` (and per-face label files).
+
+    Parameters
+    ----------
+    path : str or path-like
+    V_input : (n, 3) array_like of float
+    F_input : (m, 3) array_like of int
+    corner_uv : (m, 3, 2) array_like of float
+        UV of corner ``j`` of face ``f`` (e.g. from :func:`atlas_corner_uv`).
+
+    Raises
+    ------
+    MeshError
+        Mismatched shapes, out-of-range indices or non-finite UVs.
+    """
+    V, F = _check_write(V_input, F_input, "mesh")
+    C = np.asarray(corner_uv, dtype=np.float64)
+    if C.shape != (F.shape[0], 3, 2):
+        raise MeshError(f"`corner_uv` should have shape ({F.shape[0]},3,2), shape is {C.shape}")
+    if not np.isfinite(C).all():
+        bad = np.flatnonzero(~np.isfinite(C).all(axis=(1, 2)))
+        raise MeshError(f"`corner_uv` is not finite on {len(bad)} face(s), e.g. {bad[:5].tolist()}")
+    VT, inv = np.unique(C.reshape(-1, 2), axis=0, return_inverse=True)
+    FT = inv.reshape(-1, 3)
+    _write(path, "# igl_heatseg atlas: per-corner UVs in [0,1]^2", V, VT, F, FT)

@@ -1,0 +1,227 @@
+"""Tests for igl_heatseg.atlas: packing charts into [0,1]^2 and OBJ writers."""
+
+from __future__ import annotations
+
+import igl
+import numpy as np
+import pytest
+
+from igl_heatseg.atlas import (
+    atlas_corner_uv,
+    boxes_overlap,
+    min_area_rotation,
+    pack_charts,
+    write_atlas_obj,
+    write_chart_obj,
+)
+from igl_heatseg.cut import cut_to_disk
+from igl_heatseg.errors import MeshError
+
+#: Exactness of coordinates re-read from OBJ files written with 17 significant digits.
+OBJ_ROUNDTRIP_TOL = 0.0
+#: Relative tolerance for lengths/areas after rigid motion and common scaling.
+SHAPE_RTOL = 1e-9
+
+
+def signed_areas(UV, F):
+    a = UV[F[:, 1]] - UV[F[:, 0]]
+    b = UV[F[:, 2]] - UV[F[:, 0]]
+    return (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / 2
+
+
+def grid_chart(nx, ny, sx=1.0, sy=1.0, angle=0.0, offset=(0.0, 0.0)):
+    x, y = np.meshgrid(np.linspace(0, sx, nx + 1), np.linspace(0, sy, ny + 1))
+    P = np.c_[x.ravel(), y.ravel()]
+    c, s = np.cos(angle), np.sin(angle)
+    P = P @ np.array([[c, s], [-s, c]]) + offset
+    F = []
+    for k in range(ny):
+        for i in range(nx):
+            a = k * (nx + 1) + i
+            F += [[a, a + 1, a + nx + 2], [a, a + nx + 2, a + nx + 1]]
+    return P, np.array(F, dtype=np.int64)
+
+
+def random_charts(k, seed):
+    rng = np.random.default_rng(seed)
+    uvs, faces = [], []
+    for _ in range(k):
+        P, F = grid_chart(
+            int(rng.integers(1, 6)),
+            int(rng.integers(1, 6)),
+            sx=rng.uniform(0.05, 3),
+            sy=rng.uniform(0.05, 3),
+            angle=rng.uniform(-np.pi, np.pi),
+            offset=rng.uniform(-10, 10, 2),
+        )
+        uvs.append(P)
+        faces.append(F)
+    return uvs, faces
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("k", [1, 2, 7, 40])
+def test_packing_no_overlap_in_unit_square(k, seed):
+    uvs, faces = random_charts(k, seed)
+    atlas = pack_charts(uvs, faces)
+    assert len(atlas.uvs) == k
+    for Q in atlas.uvs:
+        assert Q.min() >= 0.0 and Q.max() <= 1.0
+    # boxes are at least the gutter apart (up to rounding)
+    assert len(boxes_overlap(atlas.boxes, gap=atlas.gutter * (1 - 1e-6))) == 0
+    # the box really bounds its chart
+    for Q, B in zip(atlas.uvs, atlas.boxes, strict=True):
+        np.testing.assert_allclose(B, [*Q.min(0), *Q.max(0)])
+    # the layout touches the far side of the square in one axis (normalised)
+    far = max(B[2:].max() for B in atlas.boxes)
+    assert far == pytest.approx(1 - atlas.gutter / 2, abs=1e-9)
+    assert 0 < atlas.fill <= 1
+
+
+def test_packing_is_rigid_plus_common_scale_and_keeps_orientation():
+    uvs, faces = random_charts(12, seed=5)
+    atlas = pack_charts(uvs, faces)
+    for P, F, Q in zip(uvs, faces, atlas.uvs, strict=True):
+        E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
+        lp = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
+        lq = np.linalg.norm(Q[E[:, 0]] - Q[E[:, 1]], axis=1)
+        np.testing.assert_allclose(lq, atlas.scale * lp, rtol=SHAPE_RTOL)
+        # no mirror: signed areas keep their sign
+        assert (np.sign(signed_areas(Q, F)) == np.sign(signed_areas(P, F))).all()
+
+
+def test_relative_areas_follow_3d_areas():
+    sq, F = grid_chart(2, 2)
+    # the same 3D area given to charts of very different UV size: equal size in the atlas
+    atlas = pack_charts([sq, 10 * sq, 0.1 * sq], [F, F, F], areas=[1.0, 1.0, 4.0])
+    a = [abs(signed_areas(Q, F).sum()) for Q in atlas.uvs]
+    assert a[1] == pytest.approx(a[0], rel=SHAPE_RTOL)
+    assert a[2] == pytest.approx(4 * a[0], rel=SHAPE_RTOL)
+
+
+def test_min_area_rotation_of_rotated_rectangle():
+    P, _ = grid_chart(3, 1, sx=3.0, sy=1.0, angle=0.3)
+    t = min_area_rotation(P)
+    c, s = np.cos(t), np.sin(t)
+    Q = P @ np.array([[c, s], [-s, c]])
+    ext = np.ptp(Q, axis=0)
+    np.testing.assert_allclose(ext, [3.0, 1.0], rtol=1e-12)  # landscape, tight
+
+
+def test_pack_rejects_bad_input():
+    sq, F = grid_chart(1, 1)
+    with pytest.raises(MeshError, match="2 UV arrays but 1"):
+        pack_charts([sq, sq], [F])
+    with pytest.raises(MeshError, match=r"chart 0: `uv` should have shape \(n,2\)"):
+        pack_charts([np.zeros((4, 3))], [F])
+    with pytest.raises(MeshError, match="chart 1: face indices"):
+        pack_charts([sq, sq], [F, F + 10])
+    with pytest.raises(MeshError, match="zero UV area"):
+        pack_charts([np.zeros_like(sq)], [F])
+    with pytest.raises(MeshError, match="NaN"):
+        pack_charts([np.full_like(sq, np.nan)], [F])
+    with pytest.raises(MeshError, match="areas"):
+        pack_charts([sq], [F], areas=[-1.0])
+    with pytest.raises(MeshError, match="gutter"):
+        pack_charts([sq], [F], gutter=0.7)
+    with pytest.raises(MeshError, match="no charts"):
+        pack_charts([], [])
+
+
+def test_boxes_overlap():
+    B = [[0, 0, 1, 1], [1, 0, 2, 1], [0.5, 0.5, 1.5, 1.5], [3, 3, 4, 4]]
+    pairs = boxes_overlap(B)
+    assert sorted(map(tuple, pairs.tolist())) == [(0, 2), (1, 2)]  # touching is fine
+    assert (0, 1) in set(map(tuple, boxes_overlap(B, gap=0.1).tolist()))
+
+
+def test_chart_obj_roundtrip(tmp_path):
+    P, F = grid_chart(3, 2, sx=1 / 3, sy=np.pi)
+    V = np.c_[P, np.sin(P[:, 0])]
+    path = tmp_path / "chart_000.obj"
+    write_chart_obj(path, V, F, P * np.e)
+    V2, TC, _, F2, FTC, _ = igl.readOBJ(str(path))
+    np.testing.assert_array_equal(V2, V)
+    np.testing.assert_array_equal(TC, P * np.e)
+    np.testing.assert_array_equal(F2, F)
+    np.testing.assert_array_equal(FTC, F)
+    text = path.read_text().splitlines()
+    assert sum(ln.startswith("f ") for ln in text) == len(F)
+    assert any(ln.startswith("f 1/1 ") for ln in text)  # 1-based
+
+
+def test_chart_obj_rejects_mismatch(tmp_path):
+    P, F = grid_chart(1, 1)
+    V = np.c_[P, np.zeros(len(P))]
+    with pytest.raises(MeshError, match="UV"):
+        write_chart_obj(tmp_path / "a.obj", V, F, P[:-1])
+    with pytest.raises(MeshError, match="outside"):
+        write_chart_obj(tmp_path / "a.obj", V, F + 4, P)
+
+
+def cylinder(nu=16, nv=4):
+    t = np.linspace(0, 2 * np.pi, nu, endpoint=False)
+    V = np.concatenate([np.c_[np.cos(t), np.sin(t), np.full(nu, z)] for z in range(nv + 1)])
+    F = []
+    for k in range(nv):
+        for i in range(nu):
+            j = (i + 1) % nu
+            a, b, c, d = k * nu + i, k * nu + j, (k + 1) * nu + j, (k + 1) * nu + i
+            F += [[a, b, c], [a, c, d]]
+    return V, np.array(F, dtype=np.int64)
+
+
+def test_atlas_obj_roundtrip_with_cut_chart(tmp_path):
+    # Two charts of a cylinder: bottom half (cut open, a seam) and top half (cut open).
+    V, F = cylinder()
+    m = len(F)
+    halves = [np.arange(m // 2), np.arange(m // 2, m)]
+    uvs, chart_F = [], []
+    for faces in halves:
+        res = cut_to_disk(V, F[faces])
+        assert res.topology_after.is_disk
+        # unroll: u = angle (0..2pi, seam copies get 2pi), v = z
+        v_cut = res.cut_edges[0, 0]
+        ang = np.arctan2(res.V[:, 1], res.V[:, 0]) - np.arctan2(V[v_cut, 1], V[v_cut, 0])
+        ang = np.round(ang % (2 * np.pi), 12) % (2 * np.pi)  # the seam at exactly 0
+        uv = np.c_[ang, res.V[:, 2]]
+        # the copy of a seam vertex in faces on the "high" side gets 2pi
+        for f in range(len(res.F)):
+            a = uv[res.F[f], 0]
+            if a.max() - a.min() > np.pi:
+                for j in range(3):
+                    if uv[res.F[f, j], 0] < np.pi:
+                        uv[res.F[f, j], 0] += 2 * np.pi
+        uvs.append(uv)
+        chart_F.append(res.F)
+    for uv, Fc in zip(uvs, chart_F, strict=True):
+        assert (signed_areas(uv, Fc) > 0).all()  # a bijective unrolling
+    atlas = pack_charts(uvs, chart_F)
+    C = atlas_corner_uv(m, halves, chart_F, atlas.uvs)
+    path = tmp_path / "atlas.obj"
+    write_atlas_obj(path, V, F, C)
+    V2, TC, _, F2, FTC, _ = igl.readOBJ(str(path))
+    np.testing.assert_array_equal(V2, V)
+    np.testing.assert_array_equal(F2, F)  # input face order
+    np.testing.assert_array_equal(TC[FTC], C)
+    # one vt per distinct corner UV: each chart's cut vertices, no more
+    assert len(TC) == sum(len(u) for u in atlas.uvs)
+    assert TC.min() >= 0 and TC.max() <= 1
+
+
+def test_atlas_corner_uv_rejects_uncovered_faces():
+    P, F = grid_chart(1, 1)
+    with pytest.raises(MeshError, match="exactly one"):
+        atlas_corner_uv(3, [np.array([0, 1])], [F], [P])
+    with pytest.raises(MeshError, match="exactly one"):
+        atlas_corner_uv(2, [np.array([0, 1]), np.array([1, 0])], [F, F], [P, P])
+
+
+def test_atlas_obj_rejects_bad_corner_uv(tmp_path):
+    V, F = cylinder()
+    with pytest.raises(MeshError, match="corner_uv"):
+        write_atlas_obj(tmp_path / "a.obj", V, F, np.zeros((len(F), 3)))
+    C = np.zeros((len(F), 3, 2))
+    C[3, 1, 0] = np.nan
+    with pytest.raises(MeshError, match="not finite on 1 face"):
+        write_atlas_obj(tmp_path / "a.obj", V, F, C)

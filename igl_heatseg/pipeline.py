@@ -1,0 +1,486 @@
+"""The whole pipeline: segment, cut every chart to a disk, parameterize, pack, write.
+
+``igl-heatseg run MESH -o DIR`` (:func:`register`) and :func:`run_pipeline` do
+
+1. :func:`igl_heatseg.segment.segment_mesh` (paper §3.1-3.4);
+2. one chart per face-connected piece of each segment; user cut paths (paper §3.5: the ends of
+   a generatrix, vertex ids of the *input* mesh) are assigned to the chart holding both ends
+   and cut with :func:`igl_heatseg.cut.cut_along_paths`; with ``cut="auto"`` every chart that
+   is still not a disk is cut by :func:`igl_heatseg.cut.cut_to_disk`;
+3. :func:`igl_heatseg.param.parameterize_chart` (Hessian eigenmap, certified, with fallback);
+4. :func:`igl_heatseg.atlas.pack_charts` (areas follow the 3D areas);
+5. writes everything ``segment`` writes plus ``charts/chart_000.obj`` ... (3D positions of the
+   cut chart, ``vt`` = the chart's own UV in the units of the mesh), ``atlas.obj`` (the cleaned
+   input mesh in input face order with per-corner UVs packed in ``[0, 1]^2``) and a ``charts``
+   list in ``report.json``.
+
+A chart that is not a disk with ``cut="none"`` (and no user path making it one) is not
+parameterized: its report entry says so (``"parameterized": false``) and its corners get UV
+``(0, 0)`` in ``atlas.obj``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, Sequence
+
+import numpy as np
+
+from .atlas import atlas_corner_uv, pack_charts, write_atlas_obj, write_chart_obj
+from .checks import CleanMesh
+from .constants import EPS_DEFAULT, THETA_DEFAULT
+from .cut import CutResult, chart_topology, cut_along_paths, cut_to_disk
+from .errors import MeshError
+from .topology import face_components
+
+__all__ = ["Chart", "PipelineResult", "run_pipeline", "register", "parse_cut_path"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Chart:
+    """One chart of the pipeline.
+
+    Attributes
+    ----------
+    id : int
+    segment : int
+        Segment label the chart comes from.
+    faces : (m_i,) int64
+        Faces of the whole (cleaned) mesh, ascending.
+    cut : CutResult or None
+        The cut chart (``cut.F`` row ``r`` is face ``faces[r]``); ``None`` if not cut/prepared.
+    param : ChartParam or None
+        The chart's map (``param.UV`` indexes ``cut.V``); ``None`` if not parameterized.
+    uv : (n_i', 2) float64 or None
+        Packed atlas UVs of ``cut.V``.
+    report : dict
+        The chart's entry of ``report.json``.
+    """
+
+    id: int
+    segment: int
+    faces: np.ndarray
+    cut: CutResult | None = None
+    param: object | None = None
+    uv: np.ndarray | None = None
+    report: dict = field(default_factory=dict)
+
+
+@dataclass
+class PipelineResult:
+    """Result of :func:`run_pipeline`.
+
+    Attributes
+    ----------
+    mesh : CleanMesh
+    segmentation : Segmentation
+    charts : list of Chart
+    corner_uv : (m, 3, 2) float64
+        Atlas UV of every corner of ``mesh.F`` (``(0, 0)`` for charts not parameterized).
+    atlas : PackedAtlas or None
+    report : dict
+        What was (or would be) written to ``report.json``.
+    """
+
+    mesh: CleanMesh
+    segmentation: object
+    charts: list
+    corner_uv: np.ndarray
+    atlas: object | None
+    report: dict
+
+
+def _face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+
+
+def parse_cut_path(text: str) -> tuple[int, int]:
+    """Parse ``"V0:V1"`` (two input vertex ids) for ``--cut-path``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+    """
+    parts = text.split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        v0, v1 = int(parts[0]), int(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"cut path must be V0:V1 (two vertex ids), got {text!r}"
+        ) from None
+    return v0, v1
+
+
+def _assign_paths(
+    mesh: CleanMesh, charts: list[Chart], cut_paths: Sequence[tuple[int, int]]
+) -> dict[int, list[tuple[int, int]]]:
+    """Map input-vertex pairs to (chart id -> list of clean-vertex pairs)."""
+    n_in = mesh.n_input_vertices
+    out: dict[int, list[tuple[int, int]]] = {}
+    if not cut_paths:
+        return out
+    vert_charts: dict[int, set[int]] = {}
+    wanted = set()
+    for pair in cut_paths:
+        if len(pair) != 2:
+            raise MeshError(f"{mesh.name}: a cut path needs two vertex ids, got {pair!r}")
+        for v in pair:
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool):
+                raise MeshError(f"{mesh.name}: cut-path vertex {v!r} is not an integer")
+            if not 0 <= int(v) < n_in:
+                raise MeshError(
+                    f"{mesh.name}: cut-path vertex {v} is outside 0..{n_in - 1} (input ids)"
+                )
+            if mesh.vertex_map[int(v)] < 0:
+                raise MeshError(f"{mesh.name}: cut-path vertex {v} is not used by any face")
+            wanted.add(int(mesh.vertex_map[int(v)]))
+    wanted_arr = np.array(sorted(wanted), dtype=np.int64)
+    for ch in charts:
+        used = np.unique(mesh.F[ch.faces])
+        for v in used[np.isin(used, wanted_arr)].tolist():
+            vert_charts.setdefault(v, set()).add(ch.id)
+    for v0, v1 in cut_paths:
+        c0, c1 = int(mesh.vertex_map[int(v0)]), int(mesh.vertex_map[int(v1)])
+        if c0 == c1:
+            raise MeshError(f"{mesh.name}: cut path {v0}:{v1} starts and ends at one vertex")
+        common = sorted(vert_charts.get(c0, set()) & vert_charts.get(c1, set()))
+        if not common:
+            raise MeshError(
+                f"{mesh.name}: cut path {v0}:{v1}: no chart contains both vertices "
+                "(pick the two ends of a generatrix inside one segment)"
+            )
+        # Prefer a chart that is not a disk (the one that needs the cut), then the largest.
+        common.sort(key=lambda c: (charts[c].report["topology"]["is_disk"], -len(charts[c].faces)))
+        out.setdefault(common[0], []).append((c0, c1))
+    return out
+
+
+def _compose(first: CutResult, second: CutResult) -> CutResult:
+    """``second`` cut the output of ``first``: express it in ``first``'s input numbering."""
+    vm = first.vertex_map
+    return CutResult(
+        V=second.V,
+        F=second.F,
+        vertex_map=vm[second.vertex_map],
+        cut_edges=np.concatenate([first.cut_edges, np.sort(vm[second.cut_edges], axis=1)]),
+        cut_length=first.cut_length + second.cut_length,
+        topology_before=first.topology_before,
+        topology_after=second.topology_after,
+        method=f"{first.method}+{second.method}",
+        paths=list(first.paths) + [vm[p] for p in second.paths],
+    )
+
+
+def run_pipeline(
+    mesh: CleanMesh,
+    out_dir: str | Path | None = None,
+    theta: float = THETA_DEFAULT,
+    eps: float = EPS_DEFAULT,
+    energy: Literal["hlle", "curved"] = "hlle",
+    cut: Literal["auto", "none"] = "auto",
+    cut_paths: Sequence[tuple[int, int]] = (),
+    *,
+    fallback: str = "tutte+slim",
+    gutter: float | None = None,
+    progress=None,
+    extra: dict | None = None,
+    t_start: float | None = None,
+) -> PipelineResult:
+    """Segment, cut, parameterize, pack and (optionally) write a mesh.
+
+    Parameters
+    ----------
+    mesh : CleanMesh
+        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.checks.validate_mesh`.
+    out_dir : str or Path, optional
+        Where to write (see the module docstring); nothing is written when ``None``.
+    theta, eps : float
+        Segmentation parameters (paper Table 1 defaults).
+    energy : {"hlle", "curved"}
+        Hessian energy for :func:`igl_heatseg.param.parameterize_chart`.
+    cut : {"auto", "none"}
+        Cut non-disk charts automatically, or only along ``cut_paths``.
+    cut_paths : sequence of (int, int)
+        Generatrix ends as vertex ids of the *input* mesh (before cleaning); each pair is
+        assigned to the chart holding both (preferring a non-disk chart).
+    fallback : str
+        Passed to ``parameterize_chart``.
+    gutter : float, optional
+        Atlas gutter (default :data:`igl_heatseg.atlas.GUTTER_DEFAULT`).
+    progress : callable(stage, fraction), optional
+    extra : dict, optional
+        More entries for ``report.json``.
+    t_start : float, optional
+        ``time.perf_counter()`` at the start of the job (for ``timings["total"]``).
+
+    Returns
+    -------
+    PipelineResult
+
+    Raises
+    ------
+    MeshError
+        Bad parameters or cut-path vertex ids (named).
+    """
+    from .param import parameterize_chart
+    from .segment import segment_mesh
+
+    if cut not in ("auto", "none"):
+        raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
+    if energy not in ("hlle", "curved"):
+        raise MeshError(f"`energy` must be 'hlle' or 'curved', got {energy!r}")
+    t0 = time.perf_counter() if t_start is None else t_start
+    progress = progress or (lambda stage, fraction=1.0: None)
+    seg = segment_mesh(mesh, theta, eps, progress=progress, keep_solvers=False)
+    V, F = mesh.V, mesh.F
+    m = F.shape[0]
+    areas = _face_areas(V, F)
+
+    # 1. charts: face-connected pieces of each segment
+    t = time.perf_counter()
+    charts: list[Chart] = []
+    for s in range(seg.num_segments):
+        faces = np.flatnonzero(seg.labels == s)
+        if len(faces) == 0:
+            continue
+        count, comp = face_components(F[faces])
+        for c in range(count):
+            fc = faces[comp == c]
+            ch = Chart(id=len(charts), segment=s, faces=fc)
+            topo = chart_topology(F[fc], name=f"chart {ch.id}")
+            ch.report = {
+                "id": ch.id,
+                "segment": s,
+                "faces": int(len(fc)),
+                "area": float(areas[fc].sum()),
+                "topology": topo.as_dict(),
+            }
+            charts.append(ch)
+    if any(seg_count > 1 for seg_count in np.bincount([c.segment for c in charts])):
+        log.info("some segments are not face-connected; each piece is its own chart")
+    assigned = _assign_paths(mesh, charts, cut_paths)
+    t_charts = time.perf_counter() - t
+
+    # 2. cut and parameterize
+    t_cut = t_param = 0.0
+    for ch in charts:
+        name = f"chart {ch.id}"
+        progress("cut+param", ch.id / max(len(charts), 1))
+        t = time.perf_counter()
+        Fc = F[ch.faces]
+        res: CutResult | None = None
+        if ch.id in assigned:
+            res = cut_along_paths(V, Fc, assigned[ch.id], name=name)
+        if cut == "auto":
+            if res is None:
+                res = cut_to_disk(V, Fc, name=name)
+            elif not res.topology_after.is_disk:
+                res = _compose(res, cut_to_disk(res.V, res.F, name=name))
+        elif res is None:
+            # no cutting: only check (unpinching would change nothing for a disk)
+            res = cut_to_disk(V, Fc, name=name) if ch.report["topology"]["is_disk"] else None
+        secs_cut = time.perf_counter() - t
+        t_cut += secs_cut
+        ch.cut = res
+        ch.report["cut_method"] = res.method if res is not None else "none"
+        ch.report["cut_length"] = float(res.cut_length) if res is not None else 0.0
+        ch.report["cut_edges"] = int(len(res.cut_edges)) if res is not None else 0
+        ch.report["cut_paths"] = [
+            [int(mesh.input_vertex[v]) for v in (p[0], p[-1])] for p in (res.paths if res else [])
+        ]
+        if res is None or not res.topology_after.is_disk:
+            after = res.topology_after.as_dict() if res is not None else ch.report["topology"]
+            ch.report.update(
+                parameterized=False,
+                error="not a disk (use --cut auto or --cut-path)",
+                topology_after=after,
+                method=None,
+                bijective=False,
+                seconds=secs_cut,
+            )
+            log.warning("%s: not a disk after cutting (%s); not parameterized", name, after)
+            continue
+        t = time.perf_counter()
+        p = parameterize_chart(res.V, res.F, energy, fallback=fallback, name=name)
+        t_param += time.perf_counter() - t
+        ch.param = p
+        ch.report.update(
+            parameterized=True,
+            method=p.method,
+            bijective=bool(p.bijective),
+            flips=int(p.flips),
+            overlaps=int(p.overlaps),
+            fallback_used=bool(p.fallback_used),
+            distortion={k: float(v) for k, v in p.distortion.items()},
+            seconds=secs_cut + p.seconds,
+            attempts=p.attempts,
+        )
+    progress("cut+param", 1.0)
+
+    # 3. pack
+    t = time.perf_counter()
+    done = [ch for ch in charts if ch.param is not None]
+    corner_uv = np.zeros((m, 3, 2))
+    atlas = None
+    if done:
+        kw = {} if gutter is None else {"gutter": gutter}
+        atlas = pack_charts(
+            [ch.param.UV for ch in done],
+            [ch.cut.F for ch in done],
+            areas=[ch.report["area"] for ch in done],
+            **kw,
+        )
+        for ch, uv in zip(done, atlas.uvs, strict=True):
+            ch.uv = uv
+        corner_uv = atlas_corner_uv(
+            m,
+            [ch.faces for ch in charts],
+            [
+                ch.cut.F if ch.param is not None else np.zeros((len(ch.faces), 3), int)
+                for ch in charts
+            ],
+            [ch.uv if ch.param is not None else np.zeros((1, 2)) for ch in charts],
+        )
+    t_pack = time.perf_counter() - t
+
+    n_charts = len(charts)
+    n_param = len(done)
+    summary = {
+        "charts_total": n_charts,
+        "charts_parameterized": n_param,
+        "charts_bijective": int(sum(bool(ch.report.get("bijective")) for ch in charts)),
+        "charts_fallback": int(sum(bool(ch.report.get("fallback_used")) for ch in charts)),
+        "charts_cut": int(sum(ch.report["cut_length"] > 0 for ch in charts)),
+        "energy": energy,
+        "cut": cut,
+        "cut_paths_input": [list(map(int, p)) for p in cut_paths],
+        "atlas_fill": float(atlas.fill) if atlas is not None else 0.0,
+    }
+    report = {"charts": [ch.report for ch in charts], "parameterization": summary}
+    report.update(extra or {})
+    timings = dict(report.pop("timings", {}))
+    timings.update(charts=t_charts, cut=t_cut, param=t_param, pack=t_pack)
+    report["timings"] = timings
+
+    if out_dir is not None:
+        from .cli import write_segmentation
+
+        out = Path(out_dir)
+        t = time.perf_counter()
+        (out / "charts").mkdir(parents=True, exist_ok=True)
+        for ch in charts:
+            if ch.param is not None:
+                write_chart_obj(
+                    out / "charts" / f"chart_{ch.id:03d}.obj", ch.cut.V, ch.cut.F, ch.param.UV
+                )
+        write_atlas_obj(out / "atlas.obj", V, F, corner_uv)
+        report["timings"]["write_charts"] = time.perf_counter() - t
+        report = write_segmentation(out, mesh, seg, report, t_start=t0)
+    else:
+        report["timings"]["total"] = time.perf_counter() - t0
+    return PipelineResult(
+        mesh=mesh,
+        segmentation=seg,
+        charts=charts,
+        corner_uv=corner_uv,
+        atlas=atlas,
+        report=report,
+    )
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .cli import PROGRESS_MIN_FACES, Progress
+    from .io import load_mesh
+
+    t0 = time.perf_counter()
+    progress = Progress(enabled=args.progress == "always")
+    mesh = load_mesh(args.mesh)
+    t_load = time.perf_counter() - t0
+    if args.progress == "auto":
+        progress.enabled = mesh.F.shape[0] >= PROGRESS_MIN_FACES
+    res = run_pipeline(
+        mesh,
+        args.out,
+        theta=args.theta,
+        eps=args.eps,
+        energy=args.energy,
+        cut=args.cut,
+        cut_paths=args.cut_path or [],
+        progress=progress,
+        extra={"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}},
+        t_start=t0,
+    )
+    s = res.report["parameterization"]
+    sys.stderr.write(
+        f"{Path(args.mesh).name}: {res.segmentation.num_segments} segments, "
+        f"{s['charts_total']} charts ({s['charts_cut']} cut), {s['charts_bijective']} bijective, "
+        f"{s['charts_fallback']} via fallback, in {res.report['timings']['total']:.2f} s; "
+        f"wrote {args.out}/\n"
+    )
+    if s["charts_bijective"] < s["charts_total"]:
+        sys.stderr.write(
+            f"igl-heatseg: warning: {s['charts_total'] - s['charts_bijective']} chart(s) without "
+            "a bijective map (see report.json `charts`)\n"
+        )
+    return 0
+
+
+def register(subparsers) -> None:
+    """Add ``igl-heatseg run MESH -o DIR [--theta] [--eps] [--energy] [--cut] [--cut-path]``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        From ``parser.add_subparsers()``; the subcommand sets ``func`` (``args -> int``).
+        Exit code 0 (a chart without a bijective map is reported in report.json and warned
+        about on stderr).
+    """
+    from .cli import PROGRESS_MIN_FACES, add_segment_arguments
+
+    p = subparsers.add_parser(
+        "run",
+        help="segment, cut to disks, parameterize and pack a mesh",
+        description="Segment MESH, cut every chart to a disk, map it to the plane (Hessian "
+        "eigenmap with a certified-bijective fallback), pack an atlas and write everything "
+        "`segment` writes plus charts/chart_NNN.obj, atlas.obj and a `charts` list in "
+        "report.json.",
+    )
+    p.add_argument("mesh", help="input mesh file")
+    p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
+    add_segment_arguments(p)
+    p.add_argument(
+        "--energy",
+        choices=("hlle", "curved"),
+        default="hlle",
+        help="Hessian energy: the paper's HLLE or libigl's curved Hessian (default hlle)",
+    )
+    p.add_argument(
+        "--cut",
+        choices=("auto", "none"),
+        default="auto",
+        help="cut charts that are not disks automatically (default), or only along --cut-path",
+    )
+    p.add_argument(
+        "--cut-path",
+        type=parse_cut_path,
+        action="append",
+        metavar="V0:V1",
+        help="cut the chart holding input vertices V0 and V1 along the shortest path between "
+        "them (the ends of a generatrix, paper §3.5); repeatable",
+    )
+    p.add_argument(
+        "--progress",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help=f"progress on stderr (auto: for meshes of {PROGRESS_MIN_FACES}+ faces)",
+    )
+    p.set_defaults(func=_cmd_run)

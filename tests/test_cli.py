@@ -1,0 +1,123 @@
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from igl_heatseg.cli import Progress, main
+from igl_heatseg.io import load_mesh
+
+
+def test_segment_writes_all_outputs(tmp_path, data_dir, capsys):
+    out = tmp_path / "out"
+    assert main(["segment", str(data_dir / "fandisk.off"), "-o", str(out)]) == 0
+    labels = np.loadtxt(out / "labels.txt", dtype=int)
+    vlabels = np.loadtxt(out / "vertex_labels.txt", dtype=int)
+    rep = json.loads((out / "report.json").read_text())
+    for key in ("faces", "vertices", "components", "theta", "eps", "seed_vertices",
+                "initial_groups", "segments", "segment_areas", "merged_islands", "timings"):
+        assert key in rep, key
+    assert rep["faces"] == len(labels) == 14454 and rep["vertices"] == len(vlabels) == 7229
+    assert rep["segments"] == labels.max() + 1 == len(rep["segment_areas"])
+    assert set(rep["timings"]) >= {"load", "seeds", "factor_initial", "solve_initial", "total"}
+    # labels: largest first
+    assert rep["segment_areas"] == sorted(rep["segment_areas"], reverse=True)
+    ply = load_mesh(out / "segmented.ply")
+    assert ply.F.shape == (14454, 3)
+    assert "15 segments" in capsys.readouterr().err
+
+
+def test_labels_follow_input_order_with_unreferenced_and_duplicate_vertices(tmp_path):
+    # An OBJ with an unused vertex first and every vertex duplicated (soup).
+    from meshes import cube
+
+    V, F = cube(3)
+    soup = V[F.ravel()]
+    lines = ["v 9 9 9"] + [f"v {x:.17g} {y:.17g} {z:.17g}" for x, y, z in soup]
+    lines += [f"f {3 * i + 2} {3 * i + 3} {3 * i + 4}" for i in range(len(F))]
+    p = tmp_path / "soup.obj"
+    p.write_text("\n".join(lines) + "\n")
+    assert main(["segment", str(p), "-o", str(tmp_path / "o")]) == 0
+    labels = np.loadtxt(tmp_path / "o" / "labels.txt", dtype=int)
+    vl = np.loadtxt(tmp_path / "o" / "vertex_labels.txt", dtype=int)
+    assert len(labels) == len(F) and labels.max() == 5
+    assert len(vl) == 1 + len(soup) and vl[0] == -1
+    rep = json.loads((tmp_path / "o" / "report.json").read_text())
+    assert rep["unreferenced_vertices"] == 1 and rep["merged_vertices"] == len(soup) - len(V)
+    # copies of one vertex carry one label
+    m = load_mesh(p)
+    for c in range(len(m.V)):
+        copies = np.flatnonzero(m.vertex_map == c)
+        assert len(set(vl[copies])) == 1
+
+
+@pytest.mark.parametrize(
+    "content,name,needle",
+    [
+        (None, "missing.off", "no such file"),
+        (b"1 2 3", "x.xyz", "unknown mesh file extension"),
+        (b"", "e.obj", "empty file"),
+        (b"OFF\n99999999 1 0\n0 0 0\n", "h.off", "declares 99999999 vertices"),
+        (b"\x00\x01garbage" * 5, "g.ply", "not a PLY file"),
+        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "r.obj", "outside 0..2"),
+        (b"v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n", "i.obj", "NaN or infinite"),
+        (b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "z.obj", "zero area"),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+            "nm.obj",
+            "non-manifold edge",
+        ),
+        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n", "nv.obj",
+         "non-manifold vertex"),
+        (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n", "o.obj",
+         "inconsistent orientation"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(tmp_path, content, name, needle):
+    p = tmp_path / name
+    if content is not None:
+        p.write_bytes(content)
+    r = subprocess.run(
+        [sys.executable, "-m", "igl_heatseg", "segment", str(p), "-o", str(tmp_path / "o")],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert r.returncode == 2, r.stderr
+    err = r.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err
+    assert err.startswith("igl-heatseg: error: ") and needle in err, err
+
+
+def test_bad_parameter_is_exit_2(tmp_path, data_dir, capsys):
+    assert main(["segment", str(data_dir / "fandisk.off"), "-o", str(tmp_path), "--eps", "2"]) == 2
+    assert "eps must be in [0, 1]" in capsys.readouterr().err
+
+
+def test_progress_lines_when_not_a_tty():
+    import io
+
+    s = io.StringIO()
+    p = Progress(True, s)
+    for f in np.linspace(0, 1, 101):
+        p("heat initial", f)
+    lines = s.getvalue().splitlines()
+    assert len(lines) == 5 and lines[-1].endswith("heat initial: 100%")
+    q = Progress(False, s)
+    q("x", 1.0)
+    assert len(s.getvalue().splitlines()) == 5
+
+
+def test_progress_appears_for_large_meshes(tmp_path, data_dir):
+    r = subprocess.run(
+        [sys.executable, "-m", "igl_heatseg", "segment", str(data_dir / "fandisk.off"),
+         "-o", str(tmp_path / "o"), "--progress", "always"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert r.returncode == 0
+    assert "heat initial: 100%" in r.stderr
+
+
+def test_help_lists_segment():
+    r = subprocess.run([sys.executable, "-m", "igl_heatseg", "--help"], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0 and "segment" in r.stdout

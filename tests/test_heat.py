@@ -1,0 +1,86 @@
+import numpy as np
+import pytest
+import scipy.sparse.linalg as sla
+from meshes import cylinder, grid, sphere
+
+import igl
+from igl_heatseg.heat import HeatSolver, heat_fields
+from igl_heatseg.seeds import seed_groups, seed_mask
+
+
+def _two_seed_grid():
+    V, F = grid(10, 10)
+    group = -np.ones(len(V), dtype=np.int64)
+    group[np.isclose(V[:, 0], 0)] = 0
+    group[np.isclose(V[:, 0], 1)] = 1
+    return V, F, group
+
+
+def test_linear_profile_between_two_walls():
+    # Dirichlet 1 on x=0 and 0 on x=1, natural boundary elsewhere: u = 1 - x exactly.
+    V, F, group = _two_seed_grid()
+    U = heat_fields(V, F, group)
+    np.testing.assert_allclose(U[:, 0], 1 - V[:, 0], atol=1e-12)
+    np.testing.assert_allclose(U[:, 1], V[:, 0], atol=1e-12)
+
+
+def test_fields_sum_to_one_are_harmonic_and_fixed_on_seeds():
+    V, F = sphere(3)
+    V = V * [1.0, 0.7, 0.5]
+    mask = seed_mask(V, F, 0.1)
+    rng = np.random.default_rng(1)
+    mask &= rng.random(len(V)) < 0.3
+    k, group = seed_groups(F, mask)
+    assert k >= 3
+    U = heat_fields(V, F, group)
+    np.testing.assert_allclose(U.sum(axis=1), 1.0, atol=1e-10)
+    seeds = group >= 0
+    np.testing.assert_array_equal(U[seeds].argmax(axis=1), group[seeds])
+    np.testing.assert_allclose(U[seeds].max(axis=1), 1.0)
+    L = igl.cotmatrix(V, F)
+    np.testing.assert_allclose((L @ U)[~seeds], 0.0, atol=1e-10)
+    # maximum principle (this sphere is Delaunay: all cotangent weights are non-negative)
+    assert U.min() >= -1e-12 and U.max() <= 1 + 1e-12
+
+
+def test_matches_scipy_direct_solve():
+    V, F = cylinder(32, 6)
+    k, group = seed_groups(F, seed_mask(V, F))
+    L = igl.cotmatrix(V, F).tocsr()
+    free = np.flatnonzero(group < 0)
+    known = np.flatnonzero(group >= 0)
+    Y = (group[known][:, None] == np.arange(k)[None, :]).astype(float)
+    Uf = sla.spsolve(L[free][:, free].tocsc(), -(L[free][:, known] @ Y))
+    U = heat_fields(V, F, group)
+    np.testing.assert_allclose(U[free], Uf, atol=1e-10)
+
+
+def test_streaming_labels_equal_dense_argmax_with_low_id_ties():
+    V, F, group = _two_seed_grid()
+    solver = HeatSolver(V, F, group)
+    hl = solver.labels()
+    U = solver.temperatures([0, 1])
+    np.testing.assert_array_equal(hl.vertex_labels, U.argmax(axis=1))
+    Uf = U[F].mean(axis=1)
+    np.testing.assert_array_equal(hl.face_labels, Uf.argmax(axis=1))
+    assert hl.sum_error < 1e-12
+
+
+def test_exact_ties_go_to_the_lowest_group_across_batches():
+    from igl_heatseg.heat import _argmax_update
+
+    best = np.full(3, -np.inf)
+    arg = np.zeros(3, dtype=np.int64)
+    _argmax_update(np.array([[0.5, 0.5], [0.2, 0.8], [0.4, 0.1]]), 0, best, arg)
+    _argmax_update(np.array([[0.5, 0.1], [0.8, 0.0], [0.9, 0.0]]), 2, best, arg)
+    assert arg.tolist() == [0, 1, 2]
+
+
+def test_component_without_seed_is_rejected():
+    V1, F1 = grid(3, 3)
+    V = np.r_[V1, V1 + [5, 0, 0]]
+    F = np.r_[F1, F1 + len(V1)]
+    group = -np.ones(len(V), dtype=np.int64)
+    group[0] = 0
+    with pytest.raises(ValueError, match="hold no seed"):
+        HeatSolver(V, F, group)

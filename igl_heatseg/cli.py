@@ -25,7 +25,7 @@ __all__ = ["main", "Progress", "write_segmentation"]
 log = logging.getLogger("igl_heatseg")
 
 #: Modules that add subcommands (each has ``register(subparsers)``), besides ``segment``.
-_COMMAND_MODULES = ("igl_heatseg.evaluate",)
+_COMMAND_MODULES = ("igl_heatseg.pipeline", "igl_heatseg.evaluate")
 
 #: Meshes with at least this many faces get a progress display on stderr by default.
 PROGRESS_MIN_FACES = 50_000

@@ -1,0 +1,173 @@
+"""End-to-end tests for igl_heatseg.pipeline on a capped cylinder (a "can")."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import igl
+import numpy as np
+import pytest
+
+from igl_heatseg.atlas import boxes_overlap
+from igl_heatseg.checks import validate_mesh
+from igl_heatseg.errors import MeshError
+from igl_heatseg.pipeline import parse_cut_path, register, run_pipeline
+
+NU, NV, NR = 64, 8, 4
+HEIGHT, RADIUS = 2.0, 1.0
+#: Relative tolerance for the cut length against the cylinder height.
+LENGTH_RTOL = 0.03
+
+
+def can():
+    """Closed cylinder: side (NV x NU quads) and two capped discs (NR rings + centre).
+
+    Vertex ``k*NU + i`` is ring ``k`` (height ``k*HEIGHT/NV``), angle ``2*pi*i/NU``.
+    """
+    t = np.linspace(0, 2 * np.pi, NU, endpoint=False)
+    ring = np.c_[np.cos(t), np.sin(t)] * RADIUS
+    V = [np.c_[ring, np.full(NU, k * HEIGHT / NV)] for k in range(NV + 1)]
+    F = []
+    for k in range(NV):
+        for i in range(NU):
+            j = (i + 1) % NU
+            a, b, c, d = k * NU + i, k * NU + j, (k + 1) * NU + j, (k + 1) * NU + i
+            F += [[a, b, c], [a, c, d]]
+    n = (NV + 1) * NU
+    for z, outer, up in ((0.0, 0, False), (HEIGHT, NV * NU, True)):
+        rings = [outer]
+        for r in range(NR - 1, 0, -1):
+            V.append(np.c_[ring * r / NR, np.full(NU, z)])
+            rings.append(n)
+            n += NU
+        V.append(np.array([[0.0, 0.0, z]]))
+        centre = n
+        n += 1
+        for a0, b0 in zip(rings[:-1], rings[1:], strict=True):
+            for i in range(NU):
+                j = (i + 1) % NU
+                q = [[a0 + i, b0 + i, b0 + j], [a0 + i, b0 + j, a0 + j]]
+                F += [f[::-1] for f in q] if up else q
+        last = rings[-1]
+        for i in range(NU):
+            j = (i + 1) % NU
+            f = [last + i, centre, last + j]
+            F.append(f[::-1] if up else f)
+    V = np.concatenate(V)
+    F = np.array(F, dtype=np.int64)
+    return V, F
+
+
+@pytest.fixture(scope="module")
+def can_mesh():
+    V, F = can()
+    return validate_mesh(V, F, "can")
+
+
+def side_chart(res):
+    sizes = [c.report["faces"] for c in res.charts]
+    return res.charts[int(np.argmax(sizes))]
+
+
+def test_can_auto(can_mesh, tmp_path):
+    res = run_pipeline(can_mesh, tmp_path)
+    assert len(res.charts) == 3
+    side = side_chart(res)
+    topo = side.report["topology"]
+    assert (topo["components"], topo["euler"], topo["boundary_loops"]) == (1, 0, 2)
+    assert side.report["cut_method"] == "annulus"
+    assert side.report["cut_length"] == pytest.approx(HEIGHT, rel=LENGTH_RTOL)
+    for ch in res.charts:
+        assert ch.report["parameterized"] and ch.report["bijective"], ch.report
+        assert ch.cut.topology_after.is_disk
+    # the side unrolls into a rectangle 2*pi*R x H (up to the polygon's perimeter)
+    uv = side.param.UV
+    ext = np.sort(np.ptp(uv - uv.mean(0), axis=0))
+    perimeter = NU * 2 * RADIUS * np.sin(np.pi / NU)
+    d = side.param.distortion
+    assert d["sym_dirichlet"] < 4.05
+    assert np.prod(ext) == pytest.approx(perimeter * HEIGHT, rel=0.05)
+
+    # files
+    rep = json.loads((tmp_path / "report.json").read_text())
+    assert len(rep["charts"]) == 3
+    for key in (
+        "id",
+        "faces",
+        "area",
+        "topology",
+        "cut_length",
+        "method",
+        "bijective",
+        "flips",
+        "overlaps",
+        "distortion",
+        "seconds",
+    ):
+        assert key in rep["charts"][0]
+    assert rep["parameterization"]["charts_bijective"] == 3
+    assert (tmp_path / "labels.txt").exists()
+    V2, TC, _, F2, FTC, _ = igl.readOBJ(str(tmp_path / "atlas.obj"))
+    np.testing.assert_array_equal(F2, can_mesh.F)
+    assert TC.min() >= 0 and TC.max() <= 1
+    assert len(boxes_overlap(res.atlas.boxes)) == 0
+    np.testing.assert_array_equal(TC[FTC], res.corner_uv)
+    for ch in res.charts:
+        Vc, TCc, _, Fc, FTCc, _ = igl.readOBJ(str(tmp_path / "charts" / f"chart_{ch.id:03d}.obj"))
+        np.testing.assert_array_equal(Fc, ch.cut.F)
+        np.testing.assert_array_equal(TCc, ch.param.UV)
+
+
+def test_can_paper_mode_generatrix(can_mesh):
+    v0, v1 = 5, NV * NU + 5  # bottom and top of the same generatrix (input ids)
+    res = run_pipeline(can_mesh, None, cut="none", cut_paths=[(v0, v1)])
+    side = side_chart(res)
+    assert side.report["cut_method"] == "paths"
+    assert side.report["cut_length"] == pytest.approx(HEIGHT, rel=1e-12)
+    assert side.report["cut_paths"] == [[v0, v1]]
+    assert all(ch.report["bijective"] for ch in res.charts)
+
+
+def test_can_no_cut_reports_non_disk(can_mesh):
+    res = run_pipeline(can_mesh, None, cut="none")
+    side = side_chart(res)
+    assert side.report["parameterized"] is False
+    assert side.report["bijective"] is False
+    assert "not a disk" in side.report["error"]
+    assert np.all(res.corner_uv[side.faces] == 0)
+    assert sum(ch.report["parameterized"] for ch in res.charts) == 2
+
+
+def test_bad_cut_paths_raise(can_mesh):
+    n = can_mesh.n_input_vertices
+    with pytest.raises(MeshError, match=f"{n + 3} is outside"):
+        run_pipeline(can_mesh, None, cut_paths=[(0, n + 3)])
+    centre_bottom = (NV + 1) * NU + (NR - 1) * NU
+    with pytest.raises(MeshError, match="no chart contains both"):
+        run_pipeline(can_mesh, None, cut_paths=[(centre_bottom, centre_bottom + NU * (NR - 1) + 1)])
+    with pytest.raises(MeshError, match="cut"):
+        run_pipeline(can_mesh, None, cut="sometimes")
+
+
+def test_parse_cut_path():
+    assert parse_cut_path("12:345") == (12, 345)
+    with pytest.raises(argparse.ArgumentTypeError, match="V0:V1"):
+        parse_cut_path("12-345")
+
+
+def test_run_subcommand(tmp_path):
+    V, F = can()
+    mesh_path = tmp_path / "can.obj"
+    igl.writeOBJ(str(mesh_path), V, F)
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    out = tmp_path / "out"
+    args = parser.parse_args(
+        ["run", str(mesh_path), "-o", str(out), "--energy", "curved", "--cut-path", "5:517"]
+    )
+    assert args.cut_path == [(5, 517)]
+    assert args.func(args) == 0
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["parameterization"]["energy"] == "curved"
+    assert (out / "atlas.obj").exists() and (out / "charts" / "chart_000.obj").exists()

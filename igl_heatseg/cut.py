@@ -58,6 +58,9 @@ log = logging.getLogger(__name__)
 #: scipy's sparse graphs treat an explicit 0 as a missing edge.
 MIN_EDGE_WEIGHT: float = 1e-300
 
+#: Root vertices tried for the greedy loop system of a closed chart of genus > 0.
+CLOSED_ROOT_CANDIDATES: int = 4
+
 #: How many offenders a message lists.
 _SHOW = 5
 
@@ -441,14 +444,40 @@ def _sphere_cut(V: np.ndarray, topo: EdgeTopology) -> list[np.ndarray]:
 def _tree_cotree_cut(
     V: np.ndarray, F: np.ndarray, topo: EdgeTopology, loops: list[np.ndarray]
 ) -> list[np.ndarray]:
-    """Greedy tree-cotree cut graph; returns its paths (boundary/root to boundary/root)."""
-    n, m = V.shape[0], F.shape[0]
-    E = topo.E
+    """Greedy tree-cotree cut graph; returns its paths (boundary/root to boundary/root).
+
+    With boundary, all boundary vertices form the root.  A closed surface needs one root
+    vertex; the loops through it depend on it, so :data:`CLOSED_ROOT_CANDIDATES` roots (the
+    most saddle-like vertex, then farthest-point samples) are tried and the shortest total
+    loop length is kept.
+    """
+    n = V.shape[0]
     G = _graph(V, topo)
     if loops:
-        sources = np.unique(np.concatenate(loops))
-    else:
-        sources = np.array([int(E[0, 0])])
+        return _greedy_system(V, F, topo, G, np.unique(np.concatenate(loops)))
+    # First root: the most saddle-like vertex (most negative angle defect); short
+    # non-contractible loops run around waists, where the surface is saddle-shaped.
+    defect = igl.gaussian_curvature(V, F)
+    roots = [int(np.argmin(np.where(np.isin(np.arange(n), F), defect, np.inf)))]
+    dmin = sp_dijkstra(G, directed=False, indices=roots[0])
+    for _ in range(CLOSED_ROOT_CANDIDATES - 1):
+        roots.append(int(np.argmax(np.where(np.isfinite(dmin), dmin, -1))))
+        dmin = np.minimum(dmin, sp_dijkstra(G, directed=False, indices=roots[-1]))
+    best, best_len = [], np.inf
+    for r in roots:
+        paths = _greedy_system(V, F, topo, G, np.array([r]))
+        length = sum(np.linalg.norm(np.diff(V[p], axis=0), axis=1).sum() for p in paths)
+        if length < best_len:
+            best, best_len = paths, length
+    return best
+
+
+def _greedy_system(
+    V: np.ndarray, F: np.ndarray, topo: EdgeTopology, G: sp.csr_matrix, sources: np.ndarray
+) -> list[np.ndarray]:
+    """One greedy tree-cotree system from a root set (Erickson & Whittlesey 2005)."""
+    n, m = V.shape[0], F.shape[0]
+    E = topo.E
     dist, pred, _ = sp_dijkstra(
         G, directed=False, indices=sources, return_predecessors=True, min_only=True
     )
@@ -471,7 +500,7 @@ def _tree_cotree_cut(
     in_cotree = np.zeros(len(E), dtype=bool)
     in_cotree[sel[np.searchsorted(ukey, tkey)]] = True
     left = cand[~in_cotree[cand]]
-    log.debug("tree-cotree: %d generator edge(s), %d boundary loop(s)", len(left), len(loops))
+    log.debug("tree-cotree: %d generator edge(s), %d root vertices", len(left), len(sources))
     paths = []
     for e in left[np.argsort(dist[E[left, 0]] + dist[E[left, 1]])]:
         u, v = int(E[e, 0]), int(E[e, 1])

@@ -295,9 +295,10 @@ def test_torus_is_cut_to_disk():
     assert res.topology_before.genus == 1
     assert len(res.paths) == 2  # two generator loops
     assert_manifold_disk(res, len(F))
-    # A meridian (2*pi*0.6) plus a longitude (at least the inner circle, 2*pi*1.4), not
-    # much more than meridian + outer circle.
-    assert 2 * np.pi * 1.9 < res.cut_length < 2 * np.pi * 3.3
+    # The shortest system: a meridian and the inner equator (polygons of the mesh).
+    meridian = 12 * 2 * 0.6 * np.sin(np.pi / 12)
+    inner = 24 * 2 * (2.0 - 0.6) * np.sin(np.pi / 24)
+    assert res.cut_length == pytest.approx(meridian + inner, rel=LENGTH_RTOL)
 
 
 def test_torus_with_hole_is_cut_to_disk():

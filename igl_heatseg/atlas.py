@@ -45,6 +45,13 @@ GUTTER_DEFAULT: float = 0.004
 #: Shelf widths tried, as multiples of ``sqrt(sum of box areas)``.
 _SHELF_WIDTH_FACTORS = np.linspace(0.7, 2.5, 37)
 
+#: Skyline packing (tries quarter turns; quadratic in the chart count) is tried up to this many
+#: charts, shelf packing always.
+SKYLINE_MAX_CHARTS: int = 400
+
+#: Skyline bin widths tried, as multiples of ``sqrt(sum of box areas)``.
+_SKYLINE_WIDTH_FACTORS = np.linspace(0.8, 1.6, 9)
+
 #: UVs may exceed [0, 1] by this much from rounding before they are clipped.
 UV_ROUND_TOL: float = 1e-9
 
@@ -172,6 +179,72 @@ def _shelf(w: np.ndarray, h: np.ndarray, width: float) -> tuple[np.ndarray, floa
     return xy, used_w, y + shelf_h
 
 
+def _skyline(
+    w: np.ndarray, h: np.ndarray, width: float
+) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Bottom-left skyline packing in the given order, each box optionally turned 90 degrees.
+
+    Returns offsets (k,2), turned flags (k,), used width, total height.
+    """
+    xs = [0.0]  # skyline segment starts (ascending); segment s spans xs[s]..xs[s+1] or width
+    ys = [0.0]
+    xy = np.zeros((len(w), 2))
+    turned = np.zeros(len(w), dtype=bool)
+    used_w = total_h = 0.0
+    for i in range(len(w)):
+        best = None
+        for ww, hh, rot in ((w[i], h[i], False), (h[i], w[i], True)):
+            if ww > width:
+                continue
+            ends = xs[1:] + [width]
+            for s in range(len(xs)):
+                x = xs[s]
+                if x + ww > width * (1 + 1e-12):
+                    break
+                top, j = ys[s], s
+                while ends[j] < x + ww * (1 - 1e-12):
+                    j += 1
+                    top = max(top, ys[j])
+                key = (top + hh, x)
+                if best is None or key < best[0]:
+                    best = (key, x, top, ww, hh, rot)
+        if best is None:  # wider than the bin both ways (width >= max side, cannot happen)
+            raise RuntimeError("pack_charts: internal error, box wider than the atlas")
+        _, x, top, ww, hh, rot = best
+        xy[i] = (x, top)
+        turned[i] = rot
+        used_w, total_h = max(used_w, x + ww), max(total_h, top + hh)
+        # new skyline: segments before x, the box top over [x, x+ww), the rest after
+        x1 = x + ww
+        nx, ny = [], []
+        for s in range(len(xs)):
+            a = xs[s]
+            b = xs[s + 1] if s + 1 < len(xs) else width
+            if b <= x or a >= x1:
+                nx.append(a)
+                ny.append(ys[s])
+            else:
+                if a < x:
+                    nx.append(a)
+                    ny.append(ys[s])
+                if b > x1:
+                    nx.append(x1)
+                    ny.append(ys[s])
+        k = int(np.searchsorted(nx, x))
+        nx.insert(k, x)
+        ny.insert(k, top + hh)
+        order = np.argsort(nx, kind="stable")
+        xs, ys = [nx[o] for o in order], [ny[o] for o in order]
+        # merge neighbours of equal height
+        mx, my = [xs[0]], [ys[0]]
+        for a, y in zip(xs[1:], ys[1:], strict=True):
+            if y != my[-1]:
+                mx.append(a)
+                my.append(y)
+        xs, ys = mx, my
+    return xy, turned, used_w, total_h
+
+
 def pack_charts(
     uvs: list,
     faces: list,
@@ -268,15 +341,34 @@ def pack_charts(
     w, h = ext[:, 0] + g, ext[:, 1] + g
     order = np.lexsort((-w, -h))  # tallest first
     best = None
+    root = np.sqrt((w * h).sum())
     for fac in _SHELF_WIDTH_FACTORS:
-        width = max(fac * np.sqrt((w * h).sum()), w.max())
+        width = max(fac * root, w.max())
         xy, used_w, total_h = _shelf(w[order], h[order], width)
         side = max(used_w, total_h)
         if best is None or side < best[0] * (1 - 1e-12):
-            best = (side, xy)
-    side, xy_sorted = best
+            best = (side, xy, np.zeros(k, dtype=bool))
+    if k <= SKYLINE_MAX_CHARTS:
+        big = np.argsort(-np.maximum(w, h), kind="stable")  # longest side first
+        for fac in _SKYLINE_WIDTH_FACTORS:
+            width = max(fac * root, np.minimum(w, h).max())
+            xy, turned, used_w, total_h = _skyline(w[big], h[big], width)
+            side = max(used_w, total_h)
+            if side < best[0] * (1 - 1e-12):
+                xy_o = np.empty_like(xy)
+                t_o = np.empty_like(turned)
+                xy_o[big], t_o[big] = xy, turned
+                best = (side, xy_o[order], t_o)  # offsets in `order` space, flags not
+    side, xy_sorted, turned = best
     xy = np.empty_like(xy_sorted)
     xy[order] = xy_sorted
+    for i in np.flatnonzero(turned):
+        # a quarter turn (still a rotation: orientation kept), back into the box's corner
+        local[i] = _rotate(local[i], np.pi / 2)
+        local[i] -= local[i].min(axis=0)
+        rotations[i] = np.arctan2(
+            np.sin(rotations[i] + np.pi / 2), np.cos(rotations[i] + np.pi / 2)
+        )
     # The whole layout (with a half gutter around every box) maps to [0, 1]^2.
     scale = 1.0 / side
     out, boxes = [], np.zeros((k, 4))

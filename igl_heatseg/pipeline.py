@@ -310,7 +310,21 @@ def run_pipeline(
             log.warning("%s: not a disk after cutting (%s); not parameterized", name, after)
             continue
         t = time.perf_counter()
-        p = parameterize_chart(res.V, res.F, energy, fallback=fallback, name=name)
+        try:
+            p = parameterize_chart(res.V, res.F, energy, fallback=fallback, name=name)
+        except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
+            # One chart failing must not lose the others: report it and go on.
+            t_param += time.perf_counter() - t
+            log.warning("%s: parameterization failed: %s", name, exc)
+            ch.report.update(
+                parameterized=False,
+                error=f"parameterization failed: {exc}",
+                topology_after=res.topology_after.as_dict(),
+                method=None,
+                bijective=False,
+                seconds=secs_cut + time.perf_counter() - t,
+            )
+            continue
         t_param += time.perf_counter() - t
         ch.param = p
         ch.report.update(

@@ -252,8 +252,9 @@ def _grid_candidate_pairs(A: np.ndarray, B: np.ndarray) -> np.ndarray:
             out.append(np.stack([si, sj], axis=1))
     if not out:
         return np.zeros((0, 2), dtype=np.int64)
-    pairs = np.unique(np.concatenate(out), axis=0)
-    return pairs
+    allp = np.concatenate(out)
+    key = np.unique(allp[:, 0] * nb + allp[:, 1])
+    return np.stack([key // nb, key % nb], axis=1)
 
 
 def boundary_self_intersections(

@@ -135,6 +135,30 @@ def _tangent_frames(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t1, t2
 
 
+def _quadratic_rows(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Affine-annihilating quadratic-fit operators for a batch of local coordinates.
+
+    Returns ``Hq = pinv(R Q) R`` (b, 3, k), giving ``(d, e, g)`` of
+    ``f ~ a + b u + c v + d u^2/2 + e u v + g v^2/2``; ``Xp = pinv(X)`` (b, 3, k); and ``Q``.
+    """
+    k = u.shape[1]
+    X = np.stack([np.ones_like(u), u, v], axis=2)  # (b, k, 3)
+    Q = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)  # (b, k, 3)
+    Xp = np.linalg.pinv(X)  # (b, 3, k)
+    R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto the affine residual space
+    Hq = np.linalg.pinv(R @ Q) @ R  # (b, 3, k)
+    return Hq, Xp, Q
+
+
+def _fit_graph(u, v, w):
+    """Least-squares ``w ~ c + b.x + x^T A x / 2``: returns gradient (b, 2) and A (b, 2, 2)."""
+    Hq, Xp, Q = _quadratic_rows(u, v)
+    quad = np.einsum("bik,bk->bi", Hq, w)  # (d, e, g)
+    lin = np.einsum("bik,bk->bi", Xp, w - np.einsum("bki,bi->bk", Q, quad))
+    A = np.stack([np.stack([quad[:, 0], quad[:, 1]], 1), np.stack([quad[:, 1], quad[:, 2]], 1)], 1)
+    return lin[:, 1:], A
+
+
 def _local_hessian_rows(
     P: np.ndarray, normal: np.ndarray, coords: str
 ) -> np.ndarray:
@@ -146,15 +170,20 @@ def _local_hessian_rows(
         Neighbourhood positions relative to the centre (centre first, at the origin).
     normal : (b, 3) float64
         Unit normals at the centres.
-    coords : {"projection", "chord"}
-        Local coordinates: orthogonal projection onto the tangent plane, or the projected
-        direction rescaled to the 3D distance to the centre (a first-order exponential map).
+    coords : {"projection", "chord", "normal"}
+        Local coordinates: orthogonal projection onto the tangent plane (the paper's); the
+        projected direction rescaled to the 3D distance to the centre; or second-order
+        geodesic normal coordinates (see :func:`hlle_energy`).
 
     Returns
     -------
     H : (b, 3, k) float64
         Rows giving ``(d, sqrt(2) e, g)`` of the local quadratic fit.
     """
+    # Scale-normalise each neighbourhood (conditioning); undone below: H scales as 1/h^2.
+    h = np.sqrt(np.mean((P**2).sum(axis=2), axis=1))
+    h = np.where(h > 0, h, 1.0)
+    P = P / h[:, None, None]
     t1, t2 = _tangent_frames(normal)
     u = np.einsum("bkd,bd->bk", P, t1)
     v = np.einsum("bkd,bd->bk", P, t2)
@@ -163,18 +192,24 @@ def _local_hessian_rows(
         r2 = np.hypot(u, v)
         s = np.where(r2 > 0, r3 / np.where(r2 > 0, r2, 1.0), 1.0)
         u, v = u * s, v * s
-    # Scale-normalise each neighbourhood (conditioning); undone below: H scales as 1/h^2.
-    h = np.sqrt(np.mean(u**2 + v**2, axis=1))
-    h = np.where(h > 0, h, 1.0)
-    u = u / h[:, None]
-    v = v / h[:, None]
-    b, k = u.shape
-    X = np.stack([np.ones_like(u), u, v], axis=2)  # (b, k, 3)
-    Q = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)  # (b, k, 3)
-    Xp = np.linalg.pinv(X)  # (b, 3, k)
-    R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto affine residual space
-    RQ = R @ Q
-    H = np.linalg.pinv(RQ) @ R  # (b, 3, k)
+    elif coords == "normal":
+        # Tilt the frame to the fitted tangent plane, refit, then map the projection x to
+        # geodesic normal coordinates to second order: x + (x^T A x) A x / 6.
+        w = np.einsum("bkd,bd->bk", P, normal)
+        g, _ = _fit_graph(u, v, w)
+        n2 = normal - g[:, :1] * t1 - g[:, 1:] * t2
+        n2 /= np.linalg.norm(n2, axis=1)[:, None]
+        t1, t2 = _tangent_frames(n2)
+        u = np.einsum("bkd,bd->bk", P, t1)
+        v = np.einsum("bkd,bd->bk", P, t2)
+        w = np.einsum("bkd,bd->bk", P, n2)
+        _, A = _fit_graph(u, v, w)
+        x = np.stack([u, v], axis=2)  # (b, k, 2)
+        Ax = np.einsum("bij,bkj->bki", A, x)
+        q = (x * Ax).sum(axis=2)
+        x = x + q[:, :, None] * Ax / 6.0
+        u, v = x[:, :, 0], x[:, :, 1]
+    H, _, _ = _quadratic_rows(u, v)
     H[:, 1, :] *= np.sqrt(2.0)
     return H / (h**2)[:, None, None]
 
@@ -184,7 +219,7 @@ def hlle_energy(
     F: ArrayLike,
     *,
     min_neighbors: int = HLLE_MIN_NEIGHBORS,
-    coords: Literal["projection", "chord"] = "projection",
+    coords: Literal["projection", "chord", "normal"] = "normal",
     area: Literal["voronoi", "barycentric"] = "voronoi",
     return_parts: bool = False,
 ):
@@ -198,9 +233,13 @@ def hlle_energy(
         Triangles.
     min_neighbors : int
         Minimum neighbourhood size (besides the centre) of the local quadratic fit.
-    coords : {"projection", "chord"}
-        Local (u, v) coordinates of the neighbours: orthogonal projection on the tangent plane
-        (the paper's choice) or projected direction rescaled to the chord length.
+    coords : {"projection", "chord", "normal"}
+        Local (u, v) coordinates of the neighbours: ``"projection"`` (the paper's choice),
+        orthogonal projection on the tangent plane; ``"chord"``, the projected direction
+        rescaled to the 3D distance; ``"normal"``, second-order geodesic normal coordinates:
+        fit ``w ~ grad.x + x^T A x / 2`` to the heights, tilt the frame to the fitted tangent
+        plane, refit, and use ``x + (x^T A x) A x / 6`` (exact to third order on a cylinder
+        and a sphere), which removes most of the projection's metric error on curved charts.
     area : {"voronoi", "barycentric"}
         Vertex area ``A_i`` (``igl.massmatrix`` type).
     return_parts : bool
@@ -237,8 +276,10 @@ def hlle_energy(
         raise MeshError("hlle_energy: empty mesh (0 faces)")
     if F.min() < 0 or F.max() >= n:
         raise MeshError(f"hlle_energy: `F` indexes vertices outside 0..{n - 1}")
-    if coords not in ("projection", "chord"):
-        raise MeshError(f"hlle_energy: `coords` must be 'projection' or 'chord', got {coords!r}")
+    if coords not in ("projection", "chord", "normal"):
+        raise MeshError(
+            f"hlle_energy: `coords` must be 'projection', 'chord' or 'normal', got {coords!r}"
+        )
     mtype = {
         "voronoi": igl.MASSMATRIX_TYPE_VORONOI,
         "barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,

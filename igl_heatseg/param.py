@@ -13,7 +13,7 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
    layout, so ``l_e^2 ~ d_e^T G d_e`` for every edge ``e`` (``d_e`` the edge in eigen
    coordinates, ``G`` symmetric).  ``G`` is fitted by least squares with relative weights
    (equations divided by ``l_e^2``) and the map is ``Y G^(1/2)``.  When the numerical null space
-   has dimension ``d > 2`` (eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny charts) the same
+   has dimension ``d > 2`` (relative eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny charts) the same
    fit is done for a ``d x d`` ``G`` over all ``d`` null vectors and its best rank-2 part is used,
    which reduces to the 2 x 2 correction when ``d = 2``.
 4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
@@ -72,13 +72,14 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Generalized eigenvalues (chart scaled to unit area) at or below this are "null": such
-#: eigenvectors join the Gram fit (null space of dimension > 2).
+#: Generalized eigenvalues at or below ``NULLSPACE_TOL * max(|computed eigenvalues|)`` are
+#: "null": beyond the constant and two coordinates, such eigenvectors join the Gram fit (null
+#: space of dimension > 3, e.g. on tiny charts).
 NULLSPACE_TOL: float = 1e-8
 
 #: Shift of the shift-invert Lanczos solve, ``sigma = -EIGEN_SHIFT`` (unit-area chart): just
 #: below the zero eigenvalues so that ``K - sigma M`` is positive definite.
-EIGEN_SHIFT: float = 1e-6
+EIGEN_SHIFT: float = 1e-4
 
 #: Charts with at most this many vertices use a dense generalized eigen-solve.
 DENSE_EIGEN_MAX: int = 600
@@ -184,10 +185,7 @@ def _prepare_chart(V: ArrayLike, F: ArrayLike, name: str):
     Vc = V[used]
     ncomp, _ = face_components(Fc)
     loops = boundary_loops(Fc)
-    nv = len(used)
-    ne = len(np.unique(np.sort(np.concatenate([Fc[:, [0, 1]], Fc[:, [1, 2]], Fc[:, [2, 0]]]), 1),
-                       axis=0))
-    chi = nv - ne + Fc.shape[0]
+    chi = len(used) - len(_edges(Fc)) + Fc.shape[0]
     if ncomp != 1 or len(loops) != 1 or chi != 1:
         raise MeshError(
             f"{name}: not a topological disk ({ncomp} face component(s), {len(loops)} boundary "
@@ -209,8 +207,11 @@ def _expand(UVc: np.ndarray, used: np.ndarray, n: int) -> np.ndarray:
 
 
 def _edges(F: np.ndarray) -> np.ndarray:
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    return np.unique(np.sort(E, axis=1), axis=0)
+    """(ne, 2) unique undirected edges, smaller id first (1D-key ``np.unique``: fast)."""
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    n = int(F.max()) + 1
+    key = np.unique(E[:, 0] * n + E[:, 1])
+    return np.stack([key // n, key % n], axis=1)
 
 
 # --------------------------------------------------------------------------- Hessian map
@@ -224,23 +225,30 @@ def _mass_diagonal(V: np.ndarray, F: np.ndarray) -> np.ndarray:
 
 
 def _lowest_eigenpairs(K: sp.spmatrix, m: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Lowest ``k`` eigenpairs of ``K y = lambda diag(m) y`` (eigenvectors M-orthonormal)."""
+    """Lowest ``k`` eigenpairs of ``K y = lambda diag(m) y`` (eigenvectors M-orthonormal).
+
+    Dense ``eigh`` for small charts; otherwise shift-invert Lanczos (``eigsh``) around
+    ``-EIGEN_SHIFT`` with one sparse LU of ``K + EIGEN_SHIFT M`` in symmetric mode (minimum
+    degree ordering on ``A + A^T``: 3x less fill than the default column ordering on HLLE's
+    4-ring sparsity), LOBPCG if ARPACK fails.
+    """
     n = K.shape[0]
     k = min(k, n)
     if n <= DENSE_EIGEN_MAX:
         lam, Y = sla.eigh(K.toarray(), np.diag(m))
         return lam[:k], Y[:, :k]
     M = sp.diags(m).tocsc()
+    A = (K + EIGEN_SHIFT * M).tocsc()
+    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options={"SymmetricMode": True})
+    OP = spla.LinearOperator((n, n), matvec=lu.solve, dtype=np.float64)
     try:
-        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", tol=0.0)
+        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP,
+                            tol=0.0)
     except (RuntimeError, spla.ArpackNoConvergence) as exc:
         log.warning("eigsh failed (%s); retrying with LOBPCG", exc)
-        rng = np.random.default_rng(0)
-        X0 = rng.standard_normal((n, k))
-        P = spla.LinearOperator(
-            (n, n), matvec=spla.factorized((K + EIGEN_SHIFT * M).tocsc()), dtype=np.float64
-        )
-        lam, Y = spla.lobpcg(K, X0, B=M, M=P, largest=False, tol=1e-10, maxiter=500)
+        X0 = np.random.default_rng(0).standard_normal((n, k))
+        lam, Y = spla.lobpcg(K, X0, B=M, M=OP, largest=False, tol=1e-10, maxiter=500)
     order = np.argsort(lam)
     return lam[order], Y[:, order]
 
@@ -323,7 +331,7 @@ def hessian_map(
         raise MeshError(f"hessian_map: `energy` must be 'hlle' or 'curved', got {energy!r}")
     m = _mass_diagonal(V, F)
     lam, Y = _lowest_eigenpairs(K, m, 3 + EXTRA_EIGENPAIRS)
-    null = int(np.count_nonzero(lam <= NULLSPACE_TOL))
+    null = int(np.count_nonzero(lam <= NULLSPACE_TOL * max(np.abs(lam).max(), 1e-300)))
     keep = min(max(3, null), MAX_NULL_DIM + 1, n)
     Yk = Y[:, :keep]
     # Remove the constant: M-centre, then keep the keep-1 dominant directions (M-weighted).

@@ -1,0 +1,279 @@
+"""Tests for igl_heatseg.param: Hessian eigenmaps, Gram correction, fallback, distortion."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from igl_heatseg.errors import MeshError
+from igl_heatseg.param import (
+    METHODS,
+    compare_methods,
+    distortion,
+    gram_correction,
+    map_chart,
+    parameterize_chart,
+    tutte_map,
+)
+
+#: Edge lengths of a flat chart after the Gram correction (issue 3: 1e-8).
+ISOMETRY_TOL = 1e-8
+#: Rigid-motion fit of a cylinder patch's map to its developed rectangle, relative to its size.
+RECT_TOL_CURVED = 1e-8
+RECT_TOL_HLLE = 1e-4
+
+
+def grid(nx, ny, sx=1.0, sy=1.0, jitter=0.0, seed=0):
+    x, y = np.meshgrid(np.linspace(0, sx, nx + 1), np.linspace(0, sy, ny + 1), indexing="ij")
+    V = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    idx = np.arange(V.shape[0]).reshape(nx + 1, ny + 1)
+    if jitter:
+        inner = idx[1:-1, 1:-1].ravel()
+        rng = np.random.default_rng(seed)
+        V[inner, :2] += rng.uniform(-jitter, jitter, (len(inner), 2)) * min(sx / nx, sy / ny)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]]
+
+
+def cylinder_patch(nu, nv, angle=np.pi, r=1.0, h=2.0):
+    """A rectangle of a cylinder, already cut open (a disk), and its developed rectangle."""
+    V, F = grid(nu, nv)
+    th = V[:, 0] * angle
+    V3 = np.c_[r * np.cos(th), r * np.sin(th), V[:, 1] * h]
+    chord = 2 * r * np.sin(angle / nu / 2)  # the polyhedral surface develops along chords
+    return V3, F, np.c_[V[:, 0] * nu * chord, V[:, 1] * h]
+
+
+def sphere_cap(theta_max, nr=12, nt=32):
+    """Polar-grid spherical cap of the unit sphere, from the pole to polar angle theta_max."""
+    th = np.linspace(0, theta_max, nr + 1)[1:]
+    ph = np.linspace(0, 2 * np.pi, nt, endpoint=False)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    ring = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
+    V = np.r_[[[0.0, 0.0, 1.0]], ring]
+    F = [[0, 1 + j, 1 + (j + 1) % nt] for j in range(nt)]
+    for i in range(nr - 1):
+        for j in range(nt):
+            a, b = 1 + i * nt + j, 1 + i * nt + (j + 1) % nt
+            F += [[a, a + nt, b + nt], [a, b + nt, b]]
+    return V, np.array(F)
+
+
+def edge_lengths(X, F):
+    E = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
+    return np.linalg.norm(X[E[:, 1]] - X[E[:, 0]], axis=1)
+
+
+def rigid_fit_error(UV, T):
+    """Max deviation after the best rotation (+ reflection) and translation."""
+    A = UV - UV.mean(0)
+    B = T - T.mean(0)
+    U, _, Wt = np.linalg.svd(A.T @ B)
+    return np.abs(A @ (U @ Wt) - B).max()
+
+
+# ------------------------------------------------------------------------------------------
+# analytic cases
+
+
+@pytest.mark.parametrize("energy", ["hlle", "curved"])
+def test_flat_grid_maps_isometrically(energy):
+    V, F = grid(14, 9, sx=3.0, sy=1.5, jitter=0.3)
+    V = V @ np.array([[0.8, 0.0, 0.6], [0.0, 1.0, 0.0], [-0.6, 0.0, 0.8]])  # tilted plane
+    res = parameterize_chart(V, F, energy)
+    assert res.method == f"hessian-{energy}"
+    assert res.bijective and not res.fallback_used
+    assert np.abs(edge_lengths(res.UV, F) - edge_lengths(V, F)).max() < ISOMETRY_TOL
+    assert res.distortion["sym_dirichlet"] == pytest.approx(4.0, abs=1e-8)
+    assert res.distortion["conformal_max"] == pytest.approx(1.0, abs=1e-8)
+    assert not res.certificate.mirrored
+
+
+@pytest.mark.parametrize("energy,tol", [("curved", RECT_TOL_CURVED), ("hlle", RECT_TOL_HLLE)])
+def test_cylinder_patch_maps_to_rectangle(energy, tol):
+    V, F, T = cylinder_patch(36, 16)
+    res = parameterize_chart(V, F, energy)
+    assert res.method == f"hessian-{energy}" and res.bijective
+    size = np.ptp(T, axis=0).max()
+    assert rigid_fit_error(res.UV, T) < tol * size
+
+
+def test_gram_correction_undoes_an_affine_map():
+    V, F = grid(5, 4, jitter=0.3)
+    A = np.array([[2.0, 0.7], [-0.3, 0.5]])
+    Y = V[:, :2] @ A + [3.0, -1.0]
+    UV, G = gram_correction(Y, V, F)
+    assert np.allclose(G, np.linalg.inv(A.T @ A), atol=1e-10)  # rows: d_Y = d_X A
+    assert np.abs(edge_lengths(UV, F) - edge_lengths(V, F)).max() < ISOMETRY_TOL
+
+
+def test_mirror_image_is_turned_over_not_flipped():
+    V, F = grid(6, 6)
+    res = map_chart(V, F, "tutte")
+    assert res.bijective and res.flips == 0
+    # the stored map is counter-clockwise
+    assert not res.certificate.mirrored
+    res2 = map_chart(V[:, [1, 0, 2]], F, "tutte")  # input mirrored: triangles run clockwise
+    assert res2.bijective and res2.flips == 0 and not res2.certificate.mirrored
+
+
+@pytest.mark.parametrize("nf", [1, 2, 3])
+@pytest.mark.parametrize("energy", ["hlle", "curved"])
+def test_tiny_charts(nf, energy):
+    th = np.linspace(0.0, 2.0, 4)
+    V = np.r_[[[0.0, 0.0, 0.0]], np.c_[np.cos(th), np.sin(th), 0.1 * np.ones(4)]]
+    F = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4]])[:nf]
+    res = parameterize_chart(V[: nf + 2], F, energy)
+    assert res.bijective
+    assert np.isfinite(res.UV).all()
+    if nf == 1:  # a single triangle is laid out exactly
+        assert np.allclose(edge_lengths(res.UV, F), edge_lengths(V, F), atol=1e-12)
+
+
+def test_fallback_on_non_bijective_hessian_map():
+    """A cap covering more than a hemisphere folds in both Hessian maps; the fallback is
+    bijective and recorded."""
+    V, F = sphere_cap(2.4)
+    res = parameterize_chart(V, F, "hlle")
+    assert res.fallback_used
+    assert res.method in ("tutte", "tutte+slim")
+    assert res.bijective
+    first = res.attempts[0]
+    assert first["method"] == "hessian-hlle" and not first["bijective"]
+    assert first["flips"] > 0
+    assert [a["method"] for a in res.attempts][1] == "tutte"
+    # No fallback: the flagged Hessian map is returned as is.
+    raw = parameterize_chart(V, F, "hlle", fallback="none")
+    assert raw.method == "hessian-hlle" and not raw.bijective and raw.flips > 0
+
+
+def test_tutte_is_bijective_on_bad_triangles():
+    V, F = grid(10, 10, jitter=0.45, seed=3)
+    V[:, 2] = np.sin(5 * V[:, 0]) * 0.5
+    UV = tutte_map(V, F)
+    from igl_heatseg.bijectivity import certify_map
+
+    assert certify_map(UV, F).bijective
+
+
+def test_unreferenced_vertices_get_nan():
+    V, F = grid(3, 3)
+    V = np.r_[V, [[9.0, 9.0, 9.0]]]
+    res = parameterize_chart(V, F)
+    assert np.isnan(res.UV[-1]).all() and np.isfinite(res.UV[:-1]).all()
+
+
+# ------------------------------------------------------------------------------------------
+# distortion
+
+
+def test_distortion_of_known_maps():
+    V, F = grid(4, 4, jitter=0.2)
+    ident = distortion(V, F, V[:, :2])
+    assert ident["conformal_mean"] == pytest.approx(1.0)
+    assert ident["area_max"] == pytest.approx(1.0)
+    assert ident["sym_dirichlet"] == pytest.approx(4.0)
+    assert ident["stretch_max"] == pytest.approx(1.0)
+    # Uniform scaling is normalised away.
+    assert distortion(V, F, 7.0 * V[:, :2])["sym_dirichlet"] == pytest.approx(4.0)
+    # Stretch (2, 1): after area normalisation s = (sqrt 2, 1/sqrt 2).
+    d = distortion(V, F, V[:, :2] * [2.0, 1.0])
+    assert d["conformal_mean"] == pytest.approx(2.0)
+    assert d["conformal_max"] == pytest.approx(2.0)
+    assert d["area_mean"] == pytest.approx(1.0)
+    assert d["sym_dirichlet"] == pytest.approx(2.0 + 0.5 + 0.5 + 2.0)
+    assert d["stretch_max"] == pytest.approx(np.sqrt(2.0))
+    # Non-uniform area: left half scaled by 2 along x, right half not -> area ratio varies.
+    UV = V[:, :2].copy()
+    UV[:, 0] = np.where(UV[:, 0] < 0.5, 2 * UV[:, 0], UV[:, 0] + 0.5)
+    d = distortion(V, F, UV)
+    assert d["area_max"] > 1.2
+
+
+def test_degenerate_map_has_infinite_distortion():
+    V, F = grid(2, 2)
+    UV = V[:, :2].copy()
+    UV[:, 1] = 0.0
+    UV[0] = [0.0, 1.0]  # keep some area so that normalisation is defined
+    d = distortion(V, F, UV)
+    assert np.isinf(d["conformal_max"]) and np.isinf(d["sym_dirichlet"])
+
+
+# ------------------------------------------------------------------------------------------
+# baselines and comparison
+
+
+def test_all_methods_run_through_the_certificate():
+    V, F, _ = cylinder_patch(12, 6)
+    rows = compare_methods([("cyl", V, F)], methods=METHODS)
+    assert [r["method"] for r in rows] == list(METHODS)
+    for r in rows:
+        assert "error" not in r, r
+        assert r["faces"] == len(F)
+        assert r["bijective"] in (True, False)
+        assert r["sym_dirichlet"] >= 4.0 - 1e-9
+    by = {r["method"]: r for r in rows}
+    # On a developable chart the Hessian maps are isometric, harmonic (circle) is not.
+    assert by["hessian-curved"]["sym_dirichlet"] == pytest.approx(4.0, abs=1e-6)
+    assert by["hessian-hlle"]["sym_dirichlet"] == pytest.approx(4.0, abs=1e-4)
+    assert by["harmonic"]["sym_dirichlet"] > 4.5
+    assert by["tutte"]["bijective"]
+
+
+# ------------------------------------------------------------------------------------------
+# input errors
+
+
+def test_non_disk_charts_are_rejected():
+    # annulus: a full cylinder without caps
+    V, F, _ = cylinder_patch(12, 4, angle=2 * np.pi)
+    n = 13
+    # weld the seam: vertex i*(nv+1)+j with i == nu equals i == 0
+    ids = np.arange(len(V)).reshape(n, 5)
+    weld = np.arange(len(V))
+    weld[ids[-1]] = ids[0]
+    F2 = weld[F]
+    with pytest.raises(MeshError, match="disk"):
+        parameterize_chart(V, F2)
+    # two components
+    Vg, Fg = grid(2, 2)
+    with pytest.raises(MeshError, match="disk"):
+        parameterize_chart(np.r_[Vg, Vg + 5], np.r_[Fg, Fg + len(Vg)])
+
+
+def test_bad_arguments_raise():
+    V, F = grid(3, 3)
+    with pytest.raises(MeshError, match="energy"):
+        parameterize_chart(V, F, "biharmonic")
+    with pytest.raises(MeshError, match="fallback"):
+        parameterize_chart(V, F, fallback="arap")
+    with pytest.raises(MeshError, match="method"):
+        map_chart(V, F, "magic")
+    with pytest.raises(MeshError, match="shape"):
+        parameterize_chart(V[:, :2], F)
+    with pytest.raises(MeshError, match="outside"):
+        parameterize_chart(V, F + 100)
+
+
+# ------------------------------------------------------------------------------------------
+# a real mesh
+
+
+@pytest.mark.slow
+def test_fandisk_charts_are_all_bijective(fandisk):
+    """Segment fandisk, cut every chart to a disk, parameterize: every chart bijective."""
+    from igl_heatseg.cut import cut_to_disk
+    from igl_heatseg.segment import segment_mesh
+
+    seg = segment_mesh(fandisk)
+    k = int(seg.labels.max()) + 1
+    assert k >= 5
+    n_fallback = 0
+    for c in range(k):
+        faces = np.flatnonzero(seg.labels == c)
+        cut = cut_to_disk(fandisk.V, fandisk.F[faces], name=f"chart {c}")
+        res = parameterize_chart(cut.V, cut.F, "hlle", name=f"chart {c}")
+        assert res.bijective, (c, res.attempts)
+        n_fallback += res.fallback_used
+    assert n_fallback < k  # most charts keep their Hessian map

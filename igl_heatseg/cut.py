@@ -39,7 +39,7 @@ from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
 from .checks import as_mesh_arrays
 from .errors import MeshError
-from .topology import EdgeTopology, boundary_loops, corner_edges, edge_topology, face_components
+from .topology import EdgeTopology, corner_edges, edge_topology, face_components
 
 __all__ = [
     "ChartTopology",
@@ -248,11 +248,26 @@ def _open(F: np.ndarray, topo: EdgeTopology, cut: np.ndarray) -> tuple[np.ndarra
 def _edge_ids(topo: EdgeTopology, n: int, pairs: np.ndarray) -> np.ndarray:
     """Unique-edge ids of vertex pairs; ``-1`` for pairs that are not edges."""
     pairs = np.sort(np.asarray(pairs, dtype=np.int64).reshape(-1, 2), axis=1)
-    keys = topo.E[:, 0] * n + topo.E[:, 1]  # np.unique order: ascending
+    keys = topo.E[:, 0] * n + topo.E[:, 1]
+    order = np.argsort(keys, kind="stable")  # E need not be sorted (see _relabel_topology)
+    sk = keys[order]
     q = pairs[:, 0] * n + pairs[:, 1]
-    pos = np.searchsorted(keys, q)
-    pos = np.minimum(pos, len(keys) - 1)
-    return np.where(keys[pos] == q, pos, -1)
+    pos = np.minimum(np.searchsorted(sk, q), len(sk) - 1)
+    return np.where(sk[pos] == q, order[pos], -1)
+
+
+def _relabel_topology(topo: EdgeTopology, Fu: np.ndarray) -> EdgeTopology:
+    """Edge topology of ``Fu = _open(F, topo, no cuts)`` from that of ``F``, without a sort.
+
+    Splitting pinched vertices splits no edge: the two faces of an interior edge share their
+    wedges at both ends.  So edge ids, ``EMAP``, counts and ``EF`` carry over and only the
+    vertex ids of ``E`` change (``E`` rows stay ``min, max`` but need not be sorted by row).
+    """
+    ncorner = len(topo.EMAP)
+    first = np.empty(len(topo.E), dtype=np.int64)
+    first[topo.EMAP[::-1]] = np.arange(ncorner)[::-1]
+    E = np.sort(corner_edges(Fu)[first], axis=1)
+    return EdgeTopology(E=E, EMAP=topo.EMAP, edge_face_count=topo.edge_face_count, EF=topo.EF)
 
 
 def _path_edges(path: np.ndarray) -> np.ndarray:
@@ -442,7 +457,7 @@ def _sphere_cut(V: np.ndarray, topo: EdgeTopology) -> list[np.ndarray]:
 
 
 def _tree_cotree_cut(
-    V: np.ndarray, F: np.ndarray, topo: EdgeTopology, loops: list[np.ndarray]
+    V: np.ndarray, F: np.ndarray, topo: EdgeTopology, boundary: np.ndarray
 ) -> list[np.ndarray]:
     """Greedy tree-cotree cut graph; returns its paths (boundary/root to boundary/root).
 
@@ -453,8 +468,8 @@ def _tree_cotree_cut(
     """
     n = V.shape[0]
     G = _graph(V, topo)
-    if loops:
-        return _greedy_system(V, F, topo, G, np.unique(np.concatenate(loops)))
+    if len(boundary):
+        return _greedy_system(V, F, topo, G, boundary)
     # First root: the most saddle-like vertex (most negative angle defect); short
     # non-contractible loops run around waists, where the surface is saddle-shaped.
     defect = igl.gaussian_curvature(V, F)
@@ -569,16 +584,15 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
     # Split pinched vertices first; the rest works on a surface.
     Fu, umap = _open(F, topo, none)
     Vu = V[umap]
-    topo_u = edge_topology(Fu)
-    loops = boundary_loops(Fu)
-    g, b = before.genus, len(loops)
+    topo_u = _relabel_topology(topo, Fu)
+    g, b = before.genus, before.boundary_loops
     if g == 0 and b == 1:
         method, paths = "unpinch", []
     elif g == 0 and b == 0:
         method, paths = "sphere-path", _sphere_cut(Vu, topo_u)
     else:
         method = "tree-cotree" if g > 0 else ("annulus" if b == 2 else "boundary-tree")
-        paths = _tree_cotree_cut(Vu, Fu, topo_u, loops)
+        paths = _tree_cotree_cut(Vu, Fu, topo_u, np.unique(topo_u.E[topo_u.boundary]))
     cut = np.zeros(len(topo_u.E), dtype=bool)
     for p in paths:
         cut[_edge_ids(topo_u, Vu.shape[0], _path_edges(p))] = True
@@ -658,7 +672,7 @@ def cut_along_paths(
     before = _topology(F, topo)
     Fu, umap = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
     Vu = np.ascontiguousarray(V[umap])
-    topo_u = edge_topology(Fu)
+    topo_u = _relabel_topology(topo, Fu)
     # input vertex -> its first wedge (pinched vertices: the path starts in one of its fans)
     prim = np.full(n, -1, dtype=np.int64)
     prim[umap[::-1]] = np.arange(len(umap))[::-1]
@@ -678,8 +692,10 @@ def cut_along_paths(
         if not np.isfinite(dist[b]) or prev[b] < 0:
             raise MeshError(f"{name}: vertices {v0} and {v1} are not connected in the chart")
         path = [b]
-        while path[-1] != a:
+        while path[-1] != a and len(path) <= len(umap):
             path.append(int(prev[path[-1]]))
+        if path[-1] != a:  # pragma: no cover - igl.dijkstra returned a broken tree
+            raise RuntimeError(f"{name}: igl.dijkstra gave no path {v0}-{v1}")
         paths.append(np.asarray(path[::-1], dtype=np.int64))
     cut = np.zeros(len(topo_u.E), dtype=bool)
     for p in paths:

@@ -459,3 +459,45 @@ def test_interior_slit_opens_only_inner_vertices():
     assert res.V.shape[0] == V.shape[0] + 1
     assert res.topology_after.boundary_loops == 2  # the slit is a second boundary loop
     assert_manifold(res.F)
+
+
+# ------------------------------------------------------------------------------------------
+# real meshes (data/)
+
+#: A cut between the two loops of a machined bore/boss is generatrix-like: its length is
+#: within this factor of the straight distance between its ends.
+GENERATRIX_STRAIGHTNESS = 1.06
+
+
+@pytest.mark.parametrize(
+    ("name", "genus"), [("block.ply", 3), ("psb_358_bearing.ply", 4), ("abc_00007974_5.ply", 4)]
+)
+def test_real_closed_meshes_of_higher_genus(data_dir, name, genus):
+    from igl_heatseg.io import load_mesh
+
+    mesh = load_mesh(data_dir / name)
+    res = cut_to_disk(mesh.V, mesh.F)
+    assert res.topology_before.genus == genus
+    assert res.method == "tree-cotree" and len(res.paths) == 2 * genus
+    assert_manifold_disk(res, len(mesh.F))
+
+
+def test_real_block_segments_become_disks(data_dir):
+    from igl_heatseg.io import load_mesh
+    from igl_heatseg.segment import segment_mesh
+
+    mesh = load_mesh(data_dir / "block.ply")
+    seg = segment_mesh(mesh, keep_solvers=False)
+    annuli = 0
+    for s in range(seg.num_segments):
+        F = mesh.F[seg.labels == s]
+        res = cut_to_disk(mesh.V, F)
+        assert_manifold_disk(res, len(F))
+        if res.method == "annulus":
+            annuli += 1
+            p = res.paths[0]
+            length = np.linalg.norm(np.diff(mesh.V[p], axis=0), axis=1).sum()
+            chord = np.linalg.norm(mesh.V[p[-1]] - mesh.V[p[0]])
+            assert length == pytest.approx(res.cut_length)
+            assert length <= GENERATRIX_STRAIGHTNESS * chord
+    assert annuli >= 6  # the block's bores and rounded edges

@@ -501,3 +501,25 @@ def test_real_block_segments_become_disks(data_dir):
             assert length == pytest.approx(res.cut_length)
             assert length <= GENERATRIX_STRAIGHTNESS * chord
     assert annuli >= 6  # the block's bores and rounded edges
+
+
+def _igl_cut_mask(F, edges):
+    """Per-face-edge mask for igl.cut_mesh: its edge j of face f is (F[f,j], F[f,(j+1)%3])."""
+    pe = {tuple(sorted(e)) for e in np.asarray(edges).tolist()}
+    return np.array(
+        [
+            [tuple(sorted((F[f, j], F[f, (j + 1) % 3]))) in pe for j in range(3)]
+            for f in range(len(F))
+        ]
+    )
+
+
+def test_opening_matches_igl_cut_mesh_on_a_generatrix():
+    V, F = cylinder(nu=32, nv=10, h=2.0)
+    res = cut_along_path(V, F, 3, 10 * 32 + 19)  # a zig-zag path across the side
+    Vn, Fn, I = igl.cut_mesh(V, F, _igl_cut_mask(F, res.cut_edges))
+    assert len(Vn) == len(res.V)
+    np.testing.assert_array_equal(np.sort(I), np.sort(res.vertex_map))
+    # same faces up to vertex naming: corner -> input vertex agrees
+    np.testing.assert_array_equal(I[Fn], res.vertex_map[res.F])
+    assert chart_topology(Fn).is_disk

@@ -135,7 +135,9 @@ def _tangent_frames(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t1, t2
 
 
-def _quadratic_rows(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _quadratic_rows(
+    u: np.ndarray, v: np.ndarray, rcond: float = 1e-15
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Affine-annihilating quadratic-fit operators for a batch of local coordinates.
 
     Returns ``Hq = pinv(R Q) R`` (b, 3, k), giving ``(d, e, g)`` of
@@ -146,7 +148,7 @@ def _quadratic_rows(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarra
     Q = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)  # (b, k, 3)
     Xp = np.linalg.pinv(X)  # (b, 3, k)
     R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto the affine residual space
-    Hq = np.linalg.pinv(R @ Q) @ R  # (b, 3, k)
+    Hq = np.linalg.pinv(R @ Q, rcond=rcond) @ R  # (b, 3, k)
     return Hq, Xp, Q
 
 
@@ -160,7 +162,7 @@ def _fit_graph(u, v, w):
 
 
 def _local_hessian_rows(
-    P: np.ndarray, normal: np.ndarray, coords: str
+    P: np.ndarray, normal: np.ndarray, coords: str, rcond: float = 1e-15
 ) -> np.ndarray:
     """Hessian rows for a batch of neighbourhoods of equal size.
 
@@ -209,7 +211,7 @@ def _local_hessian_rows(
         q = (x * Ax).sum(axis=2)
         x = x + q[:, :, None] * Ax / 6.0
         u, v = x[:, :, 0], x[:, :, 1]
-    H, _, _ = _quadratic_rows(u, v)
+    H, _, _ = _quadratic_rows(u, v, rcond)
     H[:, 1, :] *= np.sqrt(2.0)
     return H / (h**2)[:, None, None]
 
@@ -221,6 +223,7 @@ def hlle_energy(
     min_neighbors: int = HLLE_MIN_NEIGHBORS,
     coords: Literal["projection", "chord", "normal"] = "normal",
     area: Literal["voronoi", "barycentric"] = "voronoi",
+    rcond: float = 1e-15,
     return_parts: bool = False,
 ):
     """HLLE Hessian energy matrix of a triangle mesh (Mejia et al. 2016).
@@ -242,6 +245,9 @@ def hlle_energy(
         and a sphere), which removes most of the projection's metric error on curved charts.
     area : {"voronoi", "barycentric"}
         Vertex area ``A_i`` (``igl.massmatrix`` type).
+    rcond : float
+        Relative cutoff of the pseudo-inverse of the (affine-projected) quadratic design matrix;
+        raise it to drop ill-determined quadratic directions of near-degenerate neighbourhoods.
     return_parts : bool
         Also return ``B`` (3n x n, the stacked ``H_i S_i``) and the vertex areas ``A`` (n,).
 
@@ -307,7 +313,7 @@ def hlle_energy(
             idx[np.arange(len(vb)), pos] = idx[:, 0]
             idx[:, 0] = vb
             P = V[idx] - V[vb][:, None, :]
-            H = _local_hessian_rows(P, normals[vb], coords)  # (b, 3, k)
+            H = _local_hessian_rows(P, normals[vb], coords, rcond)  # (b, 3, k)
             r = (3 * vb[:, None, None] + np.arange(3)[None, :, None]) * np.ones((1, 1, k), int)
             c = np.broadcast_to(idx[:, None, :], H.shape)
             rows.append(r.ravel())

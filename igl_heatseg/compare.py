@@ -1,0 +1,226 @@
+"""Compare parameterization methods on the charts of a segmented mesh.
+
+``igl-heatseg compare-param MESH`` segments MESH (paper defaults), cuts every chart to a disk
+(:func:`igl_heatseg.cut.cut_to_disk`) and maps each chart with every method in ``--methods``
+(default: Hessian HLLE, Hessian curved, libigl harmonic, libigl LSCM), without fallbacks, all
+through the same bijectivity certificate and distortion code
+(:func:`igl_heatseg.param.compare_methods`).  It prints one table: chart, faces, method,
+bijective, flips, overlaps, distortions, seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .checks import CleanMesh
+from .errors import MeshError
+from .param import METHODS, compare_methods
+
+__all__ = ["chart_disks", "compare_param", "format_table", "register", "DEFAULT_METHODS"]
+
+log = logging.getLogger(__name__)
+
+#: Methods compared by default (the issue's four).
+DEFAULT_METHODS: tuple[str, ...] = ("hessian-hlle", "hessian-curved", "harmonic", "lscm")
+
+#: Table columns: (key, header, format).
+_COLUMNS = (
+    ("chart", "chart", "{}"),
+    ("faces", "faces", "{}"),
+    ("method", "method", "{}"),
+    ("bijective", "bij", "{}"),
+    ("flips", "flips", "{}"),
+    ("overlaps", "overl", "{}"),
+    ("conformal_mean", "conf_mean", "{:.4f}"),
+    ("conformal_max", "conf_max", "{:.3f}"),
+    ("area_mean", "area_mean", "{:.4f}"),
+    ("area_max", "area_max", "{:.3f}"),
+    ("sym_dirichlet", "symDir", "{:.4f}"),
+    ("seconds", "sec", "{:.2f}"),
+)
+
+
+def chart_disks(
+    mesh: CleanMesh, labels: np.ndarray, min_faces: int = 1
+) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """Face-connected pieces of every segment, each cut to a topological disk.
+
+    Parameters
+    ----------
+    mesh : CleanMesh
+        The segmented mesh.
+    labels : (m,) int64
+        Face labels ``0..k-1``.
+    min_faces : int
+        Skip pieces with fewer faces.
+
+    Returns
+    -------
+    charts : list of (name, V, F)
+        ``name`` is ``"<segment>.<piece>"``; ``V`` (n', 3), ``F`` (m', 3) the cut disk.  Pieces
+        the cutter cannot turn into a disk are skipped with a warning.
+    """
+    from .cut import cut_to_disk
+    from .topology import face_components
+
+    out = []
+    for s in range(int(labels.max()) + 1 if len(labels) else 0):
+        faces = np.flatnonzero(labels == s)
+        if len(faces) == 0:
+            continue
+        count, comp = face_components(mesh.F[faces])
+        for c in range(count):
+            fc = faces[comp == c]
+            if len(fc) < min_faces:
+                continue
+            name = f"{s}.{c}"
+            try:
+                res = cut_to_disk(mesh.V, mesh.F[fc], name=f"chart {name}")
+            except (MeshError, RuntimeError) as exc:
+                log.warning("chart %s: could not cut to a disk: %s", name, exc)
+                continue
+            if not res.topology_after.is_disk:
+                log.warning("chart %s: not a disk after cutting; skipped", name)
+                continue
+            out.append((name, res.V, res.F))
+    return out
+
+
+def compare_param(
+    mesh: CleanMesh,
+    theta: float | None = None,
+    eps: float | None = None,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    min_faces: int = 1,
+) -> list[dict]:
+    """Segment, cut to disks and run every method on every chart.
+
+    Parameters
+    ----------
+    mesh : CleanMesh
+        A validated mesh.
+    theta, eps : float, optional
+        Segmentation parameters (paper defaults when ``None``).
+    methods : sequence of str
+        Names from :data:`igl_heatseg.param.METHODS`.
+    min_faces : int
+        Skip charts with fewer faces.
+
+    Returns
+    -------
+    rows : list of dict
+        One per (chart, method), see :func:`igl_heatseg.param.compare_methods`.
+
+    Raises
+    ------
+    MeshError
+        Unknown method names.
+    """
+    from .constants import EPS_DEFAULT, THETA_DEFAULT
+    from .segment import segment_mesh
+
+    bad = [m for m in methods if m not in METHODS]
+    if bad:
+        raise MeshError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(METHODS)}")
+    seg = segment_mesh(
+        mesh,
+        THETA_DEFAULT if theta is None else theta,
+        EPS_DEFAULT if eps is None else eps,
+        keep_solvers=False,
+    )
+    charts = chart_disks(mesh, seg.labels, min_faces)
+    return compare_methods(charts, methods)
+
+
+def _fmt(row: dict, key: str, fmt: str) -> str:
+    if key not in row:
+        return "-"
+    v = row[key]
+    if isinstance(v, float) and not np.isfinite(v):
+        return "inf"
+    return fmt.format(v)
+
+
+def format_table(rows: list[dict]) -> str:
+    """Fixed-width text table of :func:`compare_param` rows (one line per row, plus a
+    per-method summary: bijective charts, face-weighted mean symmetric Dirichlet, total time).
+    """
+    cells = [[h for _, h, _ in _COLUMNS]]
+    for r in rows:
+        line = [_fmt(r, k, f) for k, _, f in _COLUMNS]
+        if "error" in r:
+            line[3] = "ERR"
+        cells.append(line)
+    widths = [max(len(c[i]) for c in cells) for i in range(len(_COLUMNS))]
+    lines = ["  ".join(c[i].rjust(widths[i]) for i in range(len(c))) for c in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    # Summary per method.
+    lines.append("")
+    lines.append("method            bijective  symDir(face-weighted, finite)  seconds")
+    for m in dict.fromkeys(r["method"] for r in rows):
+        rs = [r for r in rows if r["method"] == m]
+        nb = sum(bool(r.get("bijective")) for r in rs)
+        fin = [r for r in rs if np.isfinite(r.get("sym_dirichlet", np.inf))]
+        w = sum(r["faces"] for r in fin)
+        sd = sum(r["faces"] * r["sym_dirichlet"] for r in fin) / w if w else float("nan")
+        secs = sum(r.get("seconds", 0.0) for r in rs)
+        lines.append(f"{m:16s}  {nb:4d}/{len(rs):<4d}  {sd:29.4f}  {secs:7.2f}")
+    return "\n".join(lines)
+
+
+def _cmd_compare(args) -> int:
+    from .io import load_mesh
+
+    t0 = time.perf_counter()
+    mesh = load_mesh(args.mesh)
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    rows = compare_param(mesh, args.theta, args.eps, methods, args.min_faces)
+    sys.stdout.write(format_table(rows) + "\n")
+    sys.stdout.write(
+        f"\n{Path(args.mesh).name}: {len({r['chart'] for r in rows})} charts, "
+        f"{time.perf_counter() - t0:.1f} s total\n"
+    )
+    if args.json:
+        clean = [
+            {k: (v if not isinstance(v, float) or np.isfinite(v) else None) for k, v in r.items()}
+            for r in rows
+        ]
+        Path(args.json).write_text(json.dumps(clean, indent=1))
+    return 0
+
+
+def register(subparsers) -> None:
+    """Add ``igl-heatseg compare-param MESH [--methods] [--theta] [--eps] [--json]``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        From ``parser.add_subparsers()``; the subcommand sets ``func`` (``args -> int``).
+    """
+    from .cli import add_segment_arguments
+
+    p = subparsers.add_parser(
+        "compare-param",
+        help="compare parameterization methods on the charts of a segmented mesh",
+        description="Segment MESH, cut every chart to a disk and map it with several methods "
+        "(no fallback), all checked by the same bijectivity certificate; print one table "
+        "(chart, method, flips, overlaps, distortions, time).",
+    )
+    p.add_argument("mesh", help="input mesh file")
+    add_segment_arguments(p)
+    p.add_argument(
+        "--methods",
+        default=",".join(DEFAULT_METHODS),
+        help=f"comma-separated methods out of {', '.join(METHODS)} "
+        f"(default {','.join(DEFAULT_METHODS)})",
+    )
+    p.add_argument("--min-faces", type=int, default=1, help="skip charts with fewer faces")
+    p.add_argument("--json", metavar="PATH", help="also write the rows as JSON")
+    p.set_defaults(func=_cmd_compare)

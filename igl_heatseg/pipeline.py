@@ -34,7 +34,7 @@ import numpy as np
 from .atlas import atlas_corner_uv, pack_charts, write_atlas_obj, write_chart_obj
 from .checks import CleanMesh
 from .constants import EPS_DEFAULT, THETA_DEFAULT
-from .cut import CutResult, chart_topology, cut_along_paths, cut_to_disk
+from .cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
 from .errors import MeshError
 from .topology import face_components
 
@@ -278,16 +278,21 @@ def run_pipeline(
         t = time.perf_counter()
         Fc = F[ch.faces]
         res: CutResult | None = None
-        if ch.id in assigned:
-            res = cut_along_paths(V, Fc, assigned[ch.id], name=name)
-        if cut == "auto":
-            if res is None:
-                res = cut_to_disk(V, Fc, name=name)
-            elif not res.topology_after.is_disk:
-                res = _compose(res, cut_to_disk(res.V, res.F, name=name))
-        elif res is None:
-            # no cutting: only check (unpinching would change nothing for a disk)
-            res = cut_to_disk(V, Fc, name=name) if ch.report["topology"]["is_disk"] else None
+        error = "not a disk (use --cut auto or --cut-path)"
+        try:
+            if ch.id in assigned:
+                res = cut_along_paths(V, Fc, assigned[ch.id], name=name)
+            if cut == "auto":
+                if res is None:
+                    res = cut_to_disk(V, Fc, name=name)
+                elif not res.topology_after.is_disk:
+                    res = _compose(res, cut_to_disk(res.V, res.F, name=name))
+            elif res is None:
+                # no cutting: only check (unpinching would change nothing for a disk)
+                res = cut_to_disk(V, Fc, name=name) if ch.report["topology"]["is_disk"] else None
+        except (MeshError, CutError) as exc:
+            # e.g. a user path that splits the chart in two: report it, keep the other charts
+            error = f"cutting failed: {exc}"
         secs_cut = time.perf_counter() - t
         t_cut += secs_cut
         ch.cut = res
@@ -301,7 +306,7 @@ def run_pipeline(
             after = res.topology_after.as_dict() if res is not None else ch.report["topology"]
             ch.report.update(
                 parameterized=False,
-                error="not a disk (use --cut auto or --cut-path)",
+                error=error,
                 topology_after=after,
                 method=None,
                 bijective=False,

@@ -171,3 +171,12 @@ def test_run_subcommand(tmp_path):
     rep = json.loads((out / "report.json").read_text())
     assert rep["parameterization"]["energy"] == "curved"
     assert (out / "atlas.obj").exists() and (out / "charts" / "chart_000.obj").exists()
+
+
+def test_splitting_user_path_is_reported_not_fatal(can_mesh):
+    # Both ends on the bottom loop: the path cuts the side in two pieces.
+    res = run_pipeline(can_mesh, None, cut_paths=[(0, NU // 2)])
+    side = side_chart(res)
+    assert side.report["parameterized"] is False
+    assert "2 edge-connected components" in side.report["error"]
+    assert sum(ch.report["bijective"] for ch in res.charts) == 2  # the caps

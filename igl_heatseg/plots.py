@@ -1,0 +1,267 @@
+"""matplotlib figures: the area distribution (paper Fig. 12), chart maps in 2D (Fig. 14), sweeps.
+
+matplotlib is a soft dependency, imported inside the functions (Agg backend for files, so
+no display is needed), with an install hint (``pip install igl_heatseg[viz]``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+__all__ = ["area_threshold", "plot_area_distribution", "plot_chart_maps", "plot_sweep"]
+
+log = logging.getLogger(__name__)
+
+#: Install hint shown when matplotlib is missing.
+INSTALL_HINT: str = "pip install igl_heatseg[viz]"
+
+#: Colours of kept and dropped groups (bars) and of the eps line.
+KEPT_COLOR = "#1f77b4"
+DROPPED_COLOR = "#bbbbbb"
+EPS_LINE_COLOR = "#d62728"
+
+#: Figure DPI for files.
+DPI: int = 150
+
+
+def _pyplot():
+    """Import matplotlib.pyplot on the Agg backend (no display), or raise with the hint."""
+    try:
+        import matplotlib
+    except ImportError as exc:  # pragma: no cover - exercised only without matplotlib
+        raise ImportError(f"igl_heatseg.plots needs matplotlib: {INSTALL_HINT}") from exc
+    import matplotlib.pyplot as plt
+
+    if plt.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
+        try:
+            matplotlib.use("Agg")
+        except Exception:  # noqa: BLE001 - keep whatever backend is active
+            log.debug("could not switch matplotlib to Agg")
+    return plt
+
+
+def area_threshold(areas: ArrayLike, eps: float) -> float:
+    """The eps round's threshold ``eps * max(areas)``.
+
+    Parameters
+    ----------
+    areas : (k,) array_like of float
+        Initial segment areas (``Segmentation.initial_areas``).
+    eps : float
+        Area fraction in [0, 1].
+
+    Returns
+    -------
+    float
+        Groups with area strictly below this lose their seeds (for a one-component mesh;
+        :func:`igl_heatseg.segment.segment_mesh` applies it per connected component).
+
+    Examples
+    --------
+    >>> area_threshold([4.0, 1.0, 0.1], 0.05)
+    0.2
+    """
+    a = np.asarray(areas, dtype=np.float64)
+    return float(eps * a.max()) if a.size else 0.0
+
+
+def plot_area_distribution(
+    areas: ArrayLike,
+    eps: float,
+    path: str | os.PathLike | None = None,
+    *,
+    log_scale: bool = True,
+    title: str | None = None,
+    ax=None,
+):
+    """Bar chart of the sorted initial segment areas with the line ``eps * A_largest`` (Fig. 12).
+
+    Bars above the line (kept groups) are blue, bars below (dropped) grey; the legend gives
+    how many of each.  This is how a user chooses eps: the line should sit in the gap between
+    the real faces of the part and the noise groups.
+
+    Parameters
+    ----------
+    areas : (k,) array_like of float
+        Area of every initial segment (``Segmentation.initial_areas``), any order.
+    eps : float
+        Area fraction in [0, 1].
+    path : str or path-like, optional
+        Write a PNG here (parent directory must exist).
+    log_scale : bool
+        Logarithmic area axis (default), needed when noise gives thousands of tiny groups.
+    title : str, optional
+    ax : matplotlib Axes, optional
+        Draw into this Axes instead of a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        ``areas`` is empty or holds negative or non-finite values, or ``eps`` is outside [0, 1].
+    """
+    a = np.asarray(areas, dtype=np.float64).ravel()
+    if a.size == 0:
+        raise ValueError("areas is empty: nothing to plot")
+    if not np.all(np.isfinite(a)) or (a < 0).any():
+        raise ValueError("areas must be finite and non-negative")
+    if not 0 <= eps <= 1:
+        raise ValueError(f"eps must be in [0, 1], got {eps}")
+    plt = _pyplot()
+    a = np.sort(a)[::-1]
+    thr = area_threshold(a, eps)
+    kept = a >= thr
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(8, 4.5))
+    else:
+        fig = ax.figure
+    x = np.arange(1, a.size + 1)
+    width = 0.8 if a.size < 200 else 1.0
+    ax.bar(x[kept], a[kept], width=width, color=KEPT_COLOR,
+           label=f"kept: {int(kept.sum())} groups")
+    ax.bar(x[~kept], a[~kept], width=width, color=DROPPED_COLOR,
+           label=f"dropped: {int((~kept).sum())} groups")
+    ax.axhline(thr, color=EPS_LINE_COLOR, lw=1.5, ls="--",
+               label=f"eps * A_largest = {eps:g} * {a[0]:.3g} = {thr:.3g}")
+    if log_scale:
+        pos = a[a > 0]
+        ax.set_yscale("log")
+        if pos.size:
+            ax.set_ylim(pos.min() * 0.5, a[0] * 2)
+    ax.set_xlim(0.3, a.size + 0.7)
+    ax.set_xlabel("initial segment (sorted by area)")
+    ax.set_ylabel("area" + (" (log scale)" if log_scale else ""))
+    ax.set_title(title or "Initial segment areas")
+    ax.legend(loc="upper right", fontsize=9)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path), dpi=DPI)
+        log.info("wrote %s", path)
+    return fig
+
+
+def plot_chart_maps(
+    charts,
+    V: ArrayLike,
+    path: str | os.PathLike | None = None,
+    *,
+    max_charts: int = 24,
+    ncols: int | None = None,
+    edges: bool = True,
+):
+    """Each chart's 2D map in its own panel (paper Fig. 14); flipped triangles in red.
+
+    Parameters
+    ----------
+    charts : iterable
+        Chart maps (see :func:`igl_heatseg.viz.as_chart_maps`).
+    V : (n, 3) array_like of float
+        Vertices of the whole mesh.
+    path : str or path-like, optional
+        Write a PNG here.
+    max_charts : int
+        Draw at most this many (the largest by face count).
+    ncols : int, optional
+        Panels per row (default about sqrt of the count).
+    edges : bool
+        Draw triangle edges.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.collections import PolyCollection
+
+    from .io import label_colors
+    from .viz import as_chart_maps
+
+    plt = _pyplot()
+    ch = as_chart_maps(charts)
+    if not ch:
+        raise ValueError("no charts to plot")
+    order = sorted(range(len(ch)), key=lambda i: -len(ch[i].F))[:max_charts]
+    n = len(order)
+    ncols = ncols or int(np.ceil(np.sqrt(n)))
+    nrows = int(np.ceil(n / ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.2 * ncols, 3.2 * nrows), squeeze=False)
+    pal = label_colors(max(c.label for c in ch) + 1) / 255.0
+    for ax in axes.ravel():
+        ax.set_axis_off()
+    for ax, i in zip(axes.ravel(), order):
+        c = ch[i]
+        tri = c.UV[c.F]
+        col = np.tile(pal[c.label], (len(c.F), 1))
+        if len(c.flipped_faces):
+            col[c.flipped_faces] = (1.0, 0.0, 0.0)
+        pc = PolyCollection(tri, facecolors=col, edgecolors=(0, 0, 0, 0.35) if edges else "none",
+                            linewidths=0.15)
+        ax.add_collection(pc)
+        ax.set_xlim(tri[..., 0].min(), tri[..., 0].max())
+        ax.set_ylim(tri[..., 1].min(), tri[..., 1].max())
+        ax.set_aspect("equal")
+        status = "" if c.bijective is None else (" bijective" if c.bijective else " NOT bijective")
+        meth = f" {c.method}" if c.method else ""
+        ax.set_title(f"chart {i} ({len(c.F)} tri){meth}{status}", fontsize=8)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path), dpi=DPI)
+    return fig
+
+
+def plot_sweep(
+    values: Sequence[float],
+    counts: Sequence[float],
+    xlabel: str,
+    path: str | os.PathLike | None = None,
+    *,
+    ylabel: str = "segments",
+    extra: Sequence[float] | None = None,
+    extra_label: str = "bijective charts (%)",
+    ax=None,
+):
+    """Line plot of a parameter sweep (segment count vs theta or eps), optional second axis.
+
+    Parameters
+    ----------
+    values : (s,) float
+        Parameter values.
+    counts : (s,) float
+        Segment count (or any measure) per value.
+    xlabel : str
+    path : str or path-like, optional
+    ylabel : str
+    extra : (s,) float, optional
+        Second series on a right axis (e.g. the share of bijective charts).
+    extra_label : str
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _pyplot()
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6, 3.5))
+    else:
+        fig = ax.figure
+    ax.plot(values, counts, "o-", color=KEPT_COLOR)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel, color=KEPT_COLOR)
+    ax.grid(alpha=0.3)
+    if extra is not None:
+        ax2 = ax.twinx()
+        ax2.plot(values, extra, "s--", color=EPS_LINE_COLOR)
+        ax2.set_ylabel(extra_label, color=EPS_LINE_COLOR)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path), dpi=DPI)
+    return fig

@@ -394,9 +394,13 @@ def cut_mesh_along_edges(
 ) -> CutResult:
     """Open a chart along given edges (duplicating vertices), like ``igl.cut_mesh``.
 
-    Unlike ``igl.cut_mesh`` the result is vertex-manifold for any cut set: each output vertex
-    is one fan of faces joined across uncut interior edges.  A cut edge whose ends both stay
-    joined around the other side (an isolated edge in the middle of the chart) has no effect.
+    Each output vertex is one fan of faces joined across uncut interior edges, so the result
+    is vertex-manifold for any cut set (also where a cut passes through a boundary vertex or
+    the chart was pinched).  On a manifold chart it equals ``igl.cut_mesh`` (tested), without
+    its unreferenced leftover vertices.  Note: ``igl.cut_mesh``'s mask entry ``(f, j)`` is the
+    edge ``(F[f, j], F[f, (j+1) % 3])``, not the opposite-corner convention of
+    :mod:`igl_heatseg.topology`.  A cut edge whose ends both stay joined around the other side
+    (an isolated edge in the middle of the chart) has no effect.
 
     Parameters
     ----------
@@ -409,7 +413,8 @@ def cut_mesh_along_edges(
     Returns
     -------
     CutResult
-        ``method == "edges"``; ``cut_edges`` lists only the interior edges actually cut.
+        ``method == "edges"``; ``cut_edges`` lists the interior edges of the cut set
+        (boundary pairs dropped).
 
     Raises
     ------

@@ -358,8 +358,9 @@ def run_pipeline(
             areas=[ch.report["area"] for ch in done],
             **kw,
         )
-        for ch, uv in zip(done, atlas.uvs, strict=True):
+        for ch, uv, box in zip(done, atlas.uvs, atlas.boxes, strict=True):
             ch.uv = uv
+            ch.report["atlas_box"] = [float(b) for b in box]
         corner_uv = atlas_corner_uv(
             m,
             [ch.faces for ch in charts],

@@ -180,3 +180,18 @@ def test_splitting_user_path_is_reported_not_fatal(can_mesh):
     assert side.report["parameterized"] is False
     assert "2 edge-connected components" in side.report["error"]
     assert sum(ch.report["bijective"] for ch in res.charts) == 2  # the caps
+
+
+def test_cli_main_run_and_bad_cut_path(tmp_path, capsys):
+    from igl_heatseg.cli import main
+
+    V, F = can()
+    mesh_path = tmp_path / "can.off"
+    igl.write_triangle_mesh(str(mesh_path), V, F)
+    assert main(["run", str(mesh_path), "-o", str(tmp_path / "ok")]) == 0
+    assert (tmp_path / "ok" / "atlas.obj").exists()
+    capsys.readouterr()
+    code = main(["run", str(mesh_path), "-o", str(tmp_path / "bad"), "--cut-path", "0:99999"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "99999 is outside" in err[0]

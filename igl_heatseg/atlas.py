@@ -504,6 +504,17 @@ def write_chart_obj(path: str | os.PathLike, V: ArrayLike, F: ArrayLike, UV: Arr
     _write(path, "# igl_heatseg chart: v = 3D position, vt = chart UV", V, UV, F, F)
 
 
+def _unique_rows(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(P, axis=0, return_inverse=True)`` for (k, 2) floats, via one lexsort."""
+    order = np.lexsort((P[:, 1], P[:, 0]))
+    S = P[order]
+    new = np.ones(len(S), dtype=bool)
+    new[1:] = (S[1:] != S[:-1]).any(axis=1)
+    inv = np.empty(len(P), dtype=np.int64)
+    inv[order] = np.cumsum(new) - 1
+    return S[new], inv
+
+
 def write_atlas_obj(
     path: str | os.PathLike, V_input: ArrayLike, F_input: ArrayLike, corner_uv: ArrayLike
 ) -> None:
@@ -532,6 +543,6 @@ def write_atlas_obj(
     if not np.isfinite(C).all():
         bad = np.flatnonzero(~np.isfinite(C).all(axis=(1, 2)))
         raise MeshError(f"`corner_uv` is not finite on {len(bad)} face(s), e.g. {bad[:5].tolist()}")
-    VT, inv = np.unique(C.reshape(-1, 2), axis=0, return_inverse=True)
+    VT, inv = _unique_rows(C.reshape(-1, 2))
     FT = inv.reshape(-1, 3)
     _write(path, "# igl_heatseg atlas: per-corner UVs in [0,1]^2", V, VT, F, FT)

@@ -62,6 +62,7 @@ __all__ = [
     "show_seeds",
     "show_temperature",
     "show_labels",
+    "segment_boundary_edges",
     "show_checker",
     "show_chart_maps",
     "best_view_direction",
@@ -109,8 +110,8 @@ CHECKER_COLORS = ((0.97, 0.97, 0.97), (0.25, 0.25, 0.30))
 SHARP_RADIUS: float = 0.0012
 CUT_RADIUS: float = 0.003
 
-#: Checker squares per chart-UV unit: the UV of every chart is rescaled to its 3D area, and
-#: the squares are this fraction of the mesh's bounding-box diagonal.
+#: Checker square size: the UV of every chart is rescaled to its 3D area, and the squares are
+#: this fraction of polyscope's length scale (the scene's bounding-box diagonal).
 CHECKER_FRACTION: float = 1.0 / 40.0
 
 #: Isoline spacing of temperature fields (temperatures lie in [0, 1]).
@@ -257,7 +258,9 @@ def _first_attr(obj: Any, names: Sequence[str], default: Any = None) -> Any:
 def as_chart_maps(charts: Iterable[Any] | None) -> list[ChartMap]:
     """Adapt the parameterization stage's per-chart results to :class:`ChartMap`.
 
-    Accepts :class:`ChartMap` objects, or any object (or dict) with the faces of the chart
+    Accepts :class:`ChartMap` objects, :class:`igl_heatseg.pipeline.Chart` objects (``faces``,
+    ``segment``, the cut chart in ``cut`` and its map in ``param``; charts without a map are
+    skipped), or any object (or dict) with the faces of the chart
     (``faces`` / ``face_ids`` / ``face_index``), its triangles (``F``), its map (``UV``),
     the chart-vertex to mesh-vertex map (``vertex_map``), and optionally ``cut_edges``,
     ``label``, ``bijective`` (or ``certificate.bijective``), ``flipped_faces`` (or
@@ -278,15 +281,36 @@ def as_chart_maps(charts: Iterable[Any] | None) -> list[ChartMap]:
         if isinstance(c, ChartMap):
             out.append(c)
             continue
+        param = _first_attr(c, ("param",))
+        cut_res = _first_attr(c, ("cut",))
+        if param is not None or cut_res is not None:
+            # igl_heatseg.pipeline.Chart: the cut chart in ``cut``, its map in ``param``.
+            if param is None or cut_res is None:
+                continue  # not parameterized: nothing to draw
+            cert = _first_attr(param, ("certificate",))
+            flipped = None if cert is None else _first_attr(cert, ("flipped_faces",))
+            out.append(
+                ChartMap(
+                    faces=np.asarray(c.faces, dtype=np.int64),
+                    F=np.asarray(cut_res.F, dtype=np.int64),
+                    UV=np.asarray(param.UV, dtype=np.float64)[:, :2],
+                    vertex_map=np.asarray(cut_res.vertex_map, dtype=np.int64),
+                    cut_edges=np.asarray(cut_res.cut_edges, dtype=np.int64).reshape(-1, 2),
+                    label=int(_first_attr(c, ("segment",), i)),
+                    bijective=_first_attr(param, ("bijective",)),
+                    flipped_faces=np.zeros(0, np.int64)
+                    if flipped is None
+                    else np.asarray(flipped, dtype=np.int64),
+                    method=str(_first_attr(param, ("method",), "")),
+                )
+            )
+            continue
         cert = _first_attr(c, ("certificate", "cert"))
         faces = _first_attr(c, ("faces", "face_ids", "face_index"))
         F = _first_attr(c, ("F",))
         UV = _first_attr(c, ("UV", "uv"))
         vmap = _first_attr(c, ("vertex_map", "vertices"))
         cut = _first_attr(c, ("cut_edges",))
-        if cut is None:
-            cut_res = _first_attr(c, ("cut",))
-            cut = None if cut_res is None else _first_attr(cut_res, ("cut_edges",))
         if faces is None or F is None or UV is None or vmap is None:
             raise TypeError(f"chart {i}: need faces, F, UV and vertex_map, got {type(c)!r}")
         bij = _first_attr(c, ("bijective",))
@@ -328,7 +352,8 @@ def _normalised_uv(V: np.ndarray, c: ChartMap) -> np.ndarray:
     a2 = _area(c.UV, c.F).sum()
     s = math.sqrt(a3 / a2) if a2 > 0 and a3 > 0 else 1.0
     used = np.unique(c.F)
-    return (c.UV - c.UV[used].mean(axis=0)) * s
+    uv = (c.UV - c.UV[used].mean(axis=0)) * s
+    return np.nan_to_num(uv, nan=0.0)  # rows of vertices F does not use
 
 
 def corner_uv(V: np.ndarray, F: np.ndarray, charts: Sequence[ChartMap]) -> np.ndarray:
@@ -422,6 +447,34 @@ def add_curves(
 def add_sharp_edges(V: ArrayLike, sharp_edges: ArrayLike, name: str = "sharp edges", **kw):
     """Draw the sharp edges (``Segmentation.sharp_edges``, (s, 2)) as dark curves."""
     return add_curves(V, sharp_edges, name, **kw)
+
+
+def segment_boundary_edges(F: ArrayLike, labels: ArrayLike) -> np.ndarray:
+    """Interior edges whose two faces carry different labels.
+
+    Parameters
+    ----------
+    F : (m, 3) array_like of int
+    labels : (m,) array_like of int
+
+    Returns
+    -------
+    E : (k, 2) int64
+        Vertex pairs (smaller first).
+
+    Examples
+    --------
+    >>> segment_boundary_edges([[0, 1, 2], [2, 1, 3]], [0, 1]).tolist()
+    [[1, 2]]
+    """
+    from .topology import edge_topology
+
+    F = np.asarray(F, dtype=np.int64)
+    labels = np.asarray(labels, dtype=np.int64)
+    topo = edge_topology(F)
+    inner = np.flatnonzero(topo.interior)
+    f0, f1 = topo.EF[inner, 0], topo.EF[inner, 1]
+    return topo.E[inner[labels[f0] != labels[f1]]]
 
 
 def _rgb(labels: np.ndarray, k: int | None = None) -> np.ndarray:
@@ -563,7 +616,6 @@ def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cu
     V = np.asarray(V)
     charts = as_chart_maps(charts)
     m = ps.get_surface_mesh(mesh_name) if ps.has_surface_mesh(mesh_name) else add_mesh(V, F, mesh_name)
-    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     m.add_parameterization_quantity(
         "chart UV",
         corner_uv(V, np.asarray(F), charts),
@@ -572,7 +624,7 @@ def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cu
         enabled=enabled,
         viz_style="checker",
         checker_colors=CHECKER_COLORS,
-        checker_size=diag * CHECKER_FRACTION,
+        checker_size=CHECKER_FRACTION,  # "world" coords: relative to polyscope's length scale
     )
     if cuts and enabled:
         cut = [c.cut_edges for c in charts if len(c.cut_edges)]
@@ -718,14 +770,16 @@ def build_scene(
     on = {s: s == stage for s in STAGES}
     if stage == "seeds" or all_quantities:
         show_seeds(V, F, seg, enabled=on["seeds"])
-    if stage == "temperature" or all_quantities:
-        show_temperature(V, F, seg, segment=segment, enabled=on["temperature"])
+    if stage == "temperature":
+        show_temperature(V, F, seg, segment=segment)
+    elif all_quantities and seg._solvers[1] is not None:  # fields kept by segment_mesh
+        show_temperature(V, F, seg, segment=segment, enabled=False)
     if stage == "initial" or all_quantities:
         show_labels(V, F, seg.initial_labels, "initial segmentation", enabled=on["initial"])
     if stage == "final" or all_quantities:
         show_labels(V, F, seg.labels, "final segmentation", enabled=on["final"])
         if stage == "final":
-            add_sharp_edges(V, seg.sharp_edges, radius=SHARP_RADIUS * 0.6)
+            add_curves(V, segment_boundary_edges(F, seg.labels), "segment boundaries")
     if charts is not None and (stage == "checker" or all_quantities):
         show_checker(V, F, charts, enabled=on["checker"])
     return {"mesh": m, "stage": stage, "planar": False, "direction": d, "segment": segment}
@@ -929,7 +983,8 @@ def _scene_points(V: ArrayLike, charts, planar: bool) -> np.ndarray:
     """Points the camera must see: the mesh, or the laid-out charts in the plane z = 0."""
     if not planar:
         return np.asarray(V)
-    uv = np.concatenate(chart_layout(np.asarray(V), as_chart_maps(charts)))
+    ch = as_chart_maps(charts)
+    uv = np.concatenate([p[np.unique(c.F)] for c, p in zip(ch, chart_layout(np.asarray(V), ch))])
     return np.c_[uv, np.zeros(len(uv))]
 
 
@@ -997,15 +1052,21 @@ def _segment_file(mesh_path, theta: float, eps: float):
     return mesh, segment_mesh(mesh, theta, eps)
 
 
-def _charts_for(mesh, seg):
-    """Parameterize every chart with the package's parameterization stage."""
-    try:
-        from . import param
-    except ImportError as exc:
-        raise RuntimeError(
-            "the chart stages need igl_heatseg.param (the parameterization), not available"
-        ) from exc
-    return param.parameterize_segmentation(mesh, seg)  # pragma: no cover - replaced below
+def _pipeline_file(mesh_path, theta: float, eps: float):
+    """Load, segment, cut and parameterize (``igl_heatseg.pipeline.run_pipeline``, no files)."""
+    from .io import load_mesh
+    from .pipeline import run_pipeline
+
+    mesh = load_mesh(mesh_path)
+    res = run_pipeline(mesh, None, theta, eps)
+    return mesh, res.segmentation, res.charts
+
+
+def _load(mesh_path, theta: float, eps: float, need_charts: bool):
+    if need_charts:
+        return _pipeline_file(mesh_path, theta, eps)
+    mesh, seg = _segment_file(mesh_path, theta, eps)
+    return mesh, seg, None
 
 
 def render(
@@ -1047,8 +1108,7 @@ def render(
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
     t = time.perf_counter()
-    mesh, seg = _segment_file(mesh_path, theta, eps)
-    charts = _charts_for(mesh, seg) if stage in CHART_STAGES else None
+    mesh, seg, charts = _load(mesh_path, theta, eps, stage in CHART_STAGES)
     t_pipe = time.perf_counter() - t
     out = render_scene(mesh.V, mesh.F, seg, png, stage, charts=charts, size=size,
                        segment=segment, backend=backend)
@@ -1089,9 +1149,8 @@ def view(
     """
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
-    mesh, seg = _segment_file(mesh_path, theta, eps)
     want_charts = stage in CHART_STAGES if charts is None else charts
-    ch = _charts_for(mesh, seg) if want_charts else None
+    mesh, seg, ch = _load(mesh_path, theta, eps, want_charts)
     ps = init_polyscope(backend)
     info = build_scene(mesh.V, mesh.F, seg, stage, charts=ch, segment=segment,
                        all_quantities=not (stage == "charts"))

@@ -458,7 +458,12 @@ def _sphere_cut(V: np.ndarray, topo: EdgeTopology) -> list[np.ndarray]:
     a = int(np.argmax(np.where(np.isfinite(d0), d0, -1)))
     da, pred = sp_dijkstra(G, directed=False, indices=a, return_predecessors=True)
     b = int(np.argmax(np.where(np.isfinite(da), da, -1)))
-    return [np.asarray(_walk(pred, b)[::-1], dtype=np.int64)]
+    path = _walk(pred, b)[::-1]
+    if len(path) == 2:
+        # A one-edge cut opens nothing (both ends stay single wedges): go one edge further.
+        nbrs = np.union1d(G[b].indices, G[:, b].nonzero()[0])
+        path.append(int(nbrs[nbrs != a][0]))
+    return [np.asarray(path, dtype=np.int64)]
 
 
 def _tree_cotree_cut(

@@ -523,3 +523,13 @@ def test_opening_matches_igl_cut_mesh_on_a_generatrix():
     # same faces up to vertex naming: corner -> input vertex agrees
     np.testing.assert_array_equal(I[Fn], res.vertex_map[res.F])
     assert chart_topology(Fn).is_disk
+
+
+def test_tetrahedron_is_cut_to_disk():
+    # Every pair of vertices is adjacent: a one-edge cut would open nothing.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    res = cut_to_disk(V, F)
+    assert res.method == "sphere-path"
+    assert len(res.cut_edges) == 2
+    assert_manifold_disk(res, 4)

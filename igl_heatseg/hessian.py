@@ -6,12 +6,24 @@ adapted to meshes by Mejia et al. (GRAPP 2016, the paper's ref. [12])::
     K = sum_i A_i * S_i^T H_i^T H_i S_i
 
 For every vertex ``i``: ``N_i`` is its 2-ring (grown ring by ring until it has at least
-``min_neighbors`` vertices besides ``i``), ``(t1, t2, n)`` a tangent frame whose normal ``n`` is
-the area-weighted mean of the incident face normals, ``(u, v)`` the local coordinates of the
-vertices of ``N_i`` (relative to ``i``), and ``H_i`` (3 x |N_i|) the rows of the least-squares fit
+``min_neighbors`` vertices besides ``i``), ``(u, v)`` local coordinates of the vertices of
+``N_i`` (relative to ``i``), and ``H_i`` (3 x |N_i|) the rows of the least-squares fit
 ``f ~ a + b u + c v + d u^2/2 + e u v + g v^2/2`` that give ``(d, sqrt(2) e, g)``, so that
 ``|H_i f|^2 = ||Hess f||_F^2`` at ``i``.  ``A_i`` is the Voronoi area of ``i`` and ``S_i`` selects
 ``N_i``.
+
+Local coordinates (``coords``):
+
+- ``"projection"`` (the paper's): a tangent frame ``(t1, t2, n)`` whose normal is the
+  area-weighted mean of the incident face normals; ``(u, v)`` = orthogonal projection.  Its
+  metric error is O(h^2 kappa^2): intrinsic coordinates of a developable chart are only
+  approximately in the null space, and neighbourhoods that straddle a crease are wrong.
+- ``"normal"``: projection corrected to second-order geodesic normal coordinates with a local
+  quadric fit (much more accurate on smooth curved charts, still wrong across creases).
+- ``"intrinsic"`` (default): the neighbourhood unfolded from edge lengths and corner angles
+  (a discrete exponential map).  Exact on developable charts, also across creases (CAD charts
+  often contain a narrow chamfer or a crease below the segmentation threshold), and as accurate
+  as ``"normal"`` on doubly curved charts.
 
 The quadratic rows are computed after projecting out the affine part (Frisch-Waugh-Lovell):
 ``H_i = pinv(R Q) R`` with ``R = I - X pinv(X)``, ``X = [1 u v]``, ``Q = [u^2/2, u v, v^2/2]``.
@@ -85,11 +97,11 @@ def vertex_neighborhoods(
     """
     ii = F[:, [0, 1, 2, 1, 2, 0]].ravel()
     jj = F[:, [1, 2, 0, 0, 1, 2]].ravel()
-    A = sp.csr_matrix((np.ones(len(ii), dtype=np.int8), (ii, jj)), shape=(n, n))
-    A = (A + sp.identity(n, dtype=np.int8, format="csr")).astype(bool).astype(np.int8)
+    A = sp.csr_matrix((np.ones(len(ii), dtype=np.int32), (ii, jj)), shape=(n, n))
+    A = (A + sp.identity(n, dtype=np.int32, format="csr")).astype(bool).astype(np.int32)
     N = A.copy()
     for _ in range(rings - 1):
-        N = (N @ A).astype(bool).astype(np.int8)
+        N = (N @ A).astype(bool).astype(np.int32)
     N = N.tocsr()
     for _ in range(_MAX_RINGS):
         size = np.diff(N.indptr) - 1
@@ -97,19 +109,19 @@ def vertex_neighborhoods(
         if len(small) == 0:
             break
         sub = N[small]
-        grown = (sub @ A).astype(bool).astype(np.int8).tocsr()
+        grown = (sub @ A).astype(bool).astype(np.int32).tocsr()
         if np.array_equal(np.diff(grown.indptr), np.diff(sub.indptr)):
             break  # every small neighbourhood already covers its component
         rows = np.ones(n, dtype=bool)
         rows[small] = False
-        keep = sp.diags(rows.astype(np.int8), dtype=np.int8) @ N
+        keep = sp.diags(rows.astype(np.int32), dtype=np.int32) @ N
         P = sp.csr_matrix(
-            (np.ones(len(small), dtype=np.int8), (small, np.arange(len(small)))),
+            (np.ones(len(small), dtype=np.int32), (small, np.arange(len(small)))),
             shape=(n, len(small)),
         )
-        N = (keep + P @ grown).astype(bool).astype(np.int8).tocsr()
+        N = (keep + P @ grown).astype(bool).astype(np.int32).tocsr()
     N.sort_indices()
-    return N.astype(bool)
+    return N.astype(bool)  # int32 counts above: path counts cannot wrap to zero
 
 
 def _vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -133,6 +145,166 @@ def _tangent_frames(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     t1 /= np.maximum(np.linalg.norm(t1, axis=1), 1e-300)[:, None]
     t2 = np.cross(N, t1)
     return t1, t2
+
+
+def _fan_angles(V: np.ndarray, F: np.ndarray):
+    """Cumulative corner angles around every vertex, in the faces' orientation (ccw).
+
+    Returns
+    -------
+    keys : (h,) int64
+        Sorted directed pairs ``a * n + b`` (``b`` a neighbour of ``a``).
+    theta : (h,) float64
+        Angle at ``a`` from the start of its fan to the edge ``(a, b)``.
+    total : (n,) float64
+        Angle sum at every vertex.
+    boundary : (n,) bool
+        Vertices whose fan is open.
+    """
+    n = V.shape[0]
+    m = F.shape[0]
+    a = F.T.ravel()  # wedge w = c * m + f: corner c of face f
+    b = np.roll(F, -1, axis=1).T.ravel()
+    d = np.roll(F, -2, axis=1).T.ravel()
+    e1 = V[b] - V[a]
+    e2 = V[d] - V[a]
+    cosang = (e1 * e2).sum(1) / np.maximum(
+        np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1), 1e-300
+    )
+    alpha = np.arccos(np.clip(cosang, -1.0, 1.0))
+    W = 3 * m
+    start_key = a * n + b
+    end_key = a * n + d
+    order = np.argsort(start_key, kind="stable")
+    sk = start_key[order]
+    # successor: the wedge at a that starts where w ends; predecessor: the reverse.
+    pos = np.clip(np.searchsorted(sk, end_key), 0, W - 1)
+    succ = np.where(sk[pos] == end_key, order[pos], -1)
+    pred = np.full(W, -1, dtype=np.int64)
+    has = succ >= 0
+    pred[succ[has]] = np.flatnonzero(has)
+    boundary = np.zeros(n, dtype=bool)
+    boundary[a[pred < 0]] = True
+    # Cut closed fans at the smallest wedge id of each interior vertex.
+    first = np.full(n, W, dtype=np.int64)
+    np.minimum.at(first, a, np.arange(W))
+    cut = ~boundary[a] & (np.arange(W) == first[a])
+    pred[cut] = -1
+    # Prefix sums along the chains by pointer jumping (list ranking).
+    val = np.where(pred >= 0, alpha[np.maximum(pred, 0)], 0.0)
+    ptr = pred.copy()
+    while np.any(ptr >= 0):
+        ok = ptr >= 0
+        val[ok] += val[ptr[ok]]
+        nxt = np.full(W, -1, dtype=np.int64)
+        nxt[ok] = ptr[ptr[ok]]
+        ptr = nxt
+    total = np.zeros(n)
+    np.maximum.at(total, a, val + alpha)
+    keys = start_key
+    theta = val
+    # Open fans: the last wedge's end neighbour is no wedge's start.
+    last = boundary[a] & (succ < 0)
+    keys = np.concatenate([keys, end_key[last]])
+    theta = np.concatenate([theta, (val + alpha)[last]])
+    o = np.argsort(keys, kind="stable")
+    keys, theta = keys[o], theta[o]
+    keep = np.r_[True, keys[1:] != keys[:-1]]  # pinched vertices: first chain wins
+    return keys[keep], theta[keep], total, boundary
+
+
+def _lookup(keys: np.ndarray, values: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Values for query keys (``found`` False where absent)."""
+    pos = np.clip(np.searchsorted(keys, q), 0, max(len(keys) - 1, 0))
+    found = keys[pos] == q
+    return values[pos], found
+
+
+def _intrinsic_layout(V: np.ndarray, F: np.ndarray, Nb: sp.csr_matrix) -> np.ndarray:
+    """Unfolded 2D coordinates of every neighbourhood (a discrete exponential map).
+
+    For centre ``i``: 1-ring vertices at their edge length in the direction of the cumulative
+    corner angle (scaled by ``2 pi / angle sum`` at interior vertices); every further vertex
+    ``j`` is unfolded from an already placed neighbour ``a`` (reached from ``q``): at distance
+    ``|a j|`` in the direction of ``a -> q`` turned by the corner-angle sum at ``a`` between
+    ``q`` and ``j`` (the shorter way round at interior vertices).  Positions reached from
+    several ``a`` are averaged.  Exact on developable (intrinsically flat) charts, creases
+    included.
+
+    Returns
+    -------
+    X : (nnz(Nb), 2) float64
+        Coordinates aligned with ``Nb.indices`` (centre at the origin).
+    """
+    n = V.shape[0]
+    keys, theta, total, boundary = _fan_angles(V, F)
+    scale = np.where(boundary | (total <= 0), 1.0, 2.0 * np.pi / np.where(total > 0, total, 1.0))
+    adj_a = keys // n
+    adj_b = keys % n
+    adj_ptr = np.searchsorted(adj_a, np.arange(n + 1))
+    nnz = Nb.nnz
+    row = np.repeat(np.arange(n), np.diff(Nb.indptr))
+    col = Nb.indices.astype(np.int64)  # scipy stores int32 indices: keys would overflow
+    nkeys = row * n + col  # sorted (rows ascending, columns sorted)
+    X = np.full((nnz, 2), np.nan)
+    parent = np.full(nnz, -1, dtype=np.int64)  # vertex id through which an entry was placed
+    level = np.full(nnz, -1, dtype=np.int64)
+    centre = row == col
+    X[centre] = 0.0
+    level[centre] = 0
+    # Level 1: polar coordinates around the centre.
+    th, found = _lookup(keys, theta, nkeys)
+    one = found & ~centre
+    phi = scale[row[one]] * th[one]
+    r = np.linalg.norm(V[col[one]] - V[row[one]], axis=1)
+    X[one] = np.c_[r * np.cos(phi), r * np.sin(phi)]
+    parent[one] = row[one]
+    level[one] = 1
+    L = 1
+    while np.any(level < 0) and L < 64:
+        src = np.flatnonzero(level == L)  # entries (i, a) placed at level L
+        if len(src) == 0:
+            break
+        i_s, a_s = row[src], col[src]
+        deg = adj_ptr[a_s + 1] - adj_ptr[a_s]
+        t_src = np.repeat(src, deg)
+        t_i = np.repeat(i_s, deg)
+        t_a = np.repeat(a_s, deg)
+        off = np.arange(len(t_src)) - np.repeat(np.cumsum(deg) - deg, deg)
+        t_j = adj_b[np.repeat(adj_ptr[a_s], deg) + off]
+        ent = np.clip(np.searchsorted(nkeys, t_i * n + t_j), 0, nnz - 1)
+        ok = (nkeys[ent] == t_i * n + t_j) & (level[ent] < 0)
+        t_src, t_i, t_a, t_j, ent = t_src[ok], t_i[ok], t_a[ok], t_j[ok], ent[ok]
+        if len(ent) == 0:
+            break
+        q = parent[t_src]
+        q_ent = np.searchsorted(nkeys, t_i * n + q)
+        pa = X[t_src]
+        pq = X[q_ent]
+        psi = np.arctan2(pq[:, 1] - pa[:, 1], pq[:, 0] - pa[:, 0])
+        th_j, f1 = _lookup(keys, theta, t_a * n + t_j)
+        th_q, f2 = _lookup(keys, theta, t_a * n + q)
+        beta = th_j - th_q
+        interior = ~boundary[t_a]
+        beta = np.where(interior, scale[t_a] * beta, beta)
+        beta = np.where(interior, (beta + np.pi) % (2.0 * np.pi) - np.pi, beta)
+        dist = np.linalg.norm(V[t_j] - V[t_a], axis=1)
+        cand = pa + dist[:, None] * np.c_[np.cos(psi + beta), np.sin(psi + beta)]
+        good = f1 & f2 & np.all(np.isfinite(cand), axis=1)
+        ent, cand, t_a = ent[good], cand[good], t_a[good]
+        cnt = np.bincount(ent, minlength=nnz)
+        sx = np.bincount(ent, weights=cand[:, 0], minlength=nnz)
+        sy = np.bincount(ent, weights=cand[:, 1], minlength=nnz)
+        new = np.flatnonzero(cnt > 0)
+        X[new] = np.c_[sx[new], sy[new]] / cnt[new, None]
+        par = np.full(nnz, -1, dtype=np.int64)
+        par[ent] = t_a  # any one of the sources
+        parent[new] = par[new]
+        level[new] = L + 1
+        L += 1
+    # Anything unreachable (should not happen in a connected chart): put at the centre.
+    X[~np.isfinite(X).all(axis=1)] = 0.0
+    return X
 
 
 def _quadratic_rows(
@@ -159,6 +331,15 @@ def _fit_graph(u, v, w):
     lin = np.einsum("bik,bk->bi", Xp, w - np.einsum("bki,bi->bk", Q, quad))
     A = np.stack([np.stack([quad[:, 0], quad[:, 1]], 1), np.stack([quad[:, 1], quad[:, 2]], 1)], 1)
     return lin[:, 1:], A
+
+
+def _rows_from_coords(u: np.ndarray, v: np.ndarray, rcond: float) -> np.ndarray:
+    """Hessian rows ``(d, sqrt(2) e, g)`` for given local coordinates (b, k) each."""
+    h = np.sqrt(np.mean(u**2 + v**2, axis=1))
+    h = np.where(h > 0, h, 1.0)
+    H, _, _ = _quadratic_rows(u / h[:, None], v / h[:, None], rcond)
+    H[:, 1, :] *= np.sqrt(2.0)
+    return H / (h**2)[:, None, None]
 
 
 def _local_hessian_rows(
@@ -221,7 +402,7 @@ def hlle_energy(
     F: ArrayLike,
     *,
     min_neighbors: int = HLLE_MIN_NEIGHBORS,
-    coords: Literal["projection", "chord", "normal"] = "normal",
+    coords: Literal["projection", "chord", "normal", "intrinsic"] = "intrinsic",
     area: Literal["voronoi", "barycentric"] = "voronoi",
     rcond: float = 1e-15,
     return_parts: bool = False,
@@ -242,7 +423,9 @@ def hlle_energy(
         rescaled to the 3D distance; ``"normal"``, second-order geodesic normal coordinates:
         fit ``w ~ grad.x + x^T A x / 2`` to the heights, tilt the frame to the fitted tangent
         plane, refit, and use ``x + (x^T A x) A x / 6`` (exact to third order on a cylinder
-        and a sphere), which removes most of the projection's metric error on curved charts.
+        and a sphere), which removes most of the projection's metric error on curved charts;
+        ``"intrinsic"``, the neighbourhood unfolded from edge lengths and corner angles (a
+        discrete exponential map, exact on developable charts even across creases).
     area : {"voronoi", "barycentric"}
         Vertex area ``A_i`` (``igl.massmatrix`` type).
     rcond : float
@@ -282,9 +465,10 @@ def hlle_energy(
         raise MeshError("hlle_energy: empty mesh (0 faces)")
     if F.min() < 0 or F.max() >= n:
         raise MeshError(f"hlle_energy: `F` indexes vertices outside 0..{n - 1}")
-    if coords not in ("projection", "chord", "normal"):
+    if coords not in ("projection", "chord", "normal", "intrinsic"):
         raise MeshError(
-            f"hlle_energy: `coords` must be 'projection', 'chord' or 'normal', got {coords!r}"
+            "hlle_energy: `coords` must be 'projection', 'chord', 'normal' or 'intrinsic', "
+            f"got {coords!r}"
         )
     mtype = {
         "voronoi": igl.MASSMATRIX_TYPE_VORONOI,
@@ -299,6 +483,7 @@ def hlle_energy(
     A = np.asarray(igl.massmatrix(V, F, mtype).diagonal()).ravel()
     normals = _vertex_normals(V, F)
     size = np.diff(Nb.indptr)
+    Xint = _intrinsic_layout(V, F, Nb) if coords == "intrinsic" else None
 
     rows, cols, vals = [], [], []
     for k in np.unique(size[used]).tolist():
@@ -307,13 +492,22 @@ def hlle_energy(
         verts = np.flatnonzero((size == k) & used)
         for s in range(0, len(verts), _BATCH):
             vb = verts[s : s + _BATCH]
-            idx = Nb.indices[Nb.indptr[vb][:, None] + np.arange(k)[None, :]]  # (b, k) sorted
+            ent = Nb.indptr[vb][:, None] + np.arange(k)[None, :]
+            idx = Nb.indices[ent].astype(np.int64)  # (b, k) sorted
             # Put the centre first (it is somewhere in the sorted row).
             pos = np.argmax(idx == vb[:, None], axis=1)
-            idx[np.arange(len(vb)), pos] = idx[:, 0]
+            rr = np.arange(len(vb))
+            idx[rr, pos] = idx[:, 0]
             idx[:, 0] = vb
-            P = V[idx] - V[vb][:, None, :]
-            H = _local_hessian_rows(P, normals[vb], coords, rcond)  # (b, 3, k)
+            centre_ent = ent[rr, pos]
+            ent[rr, pos] = ent[:, 0]
+            ent[:, 0] = centre_ent
+            if Xint is not None:
+                XY = Xint[ent]  # centre entry is at the origin wherever it sits
+                H = _rows_from_coords(XY[:, :, 0], XY[:, :, 1], rcond)
+            else:
+                P = V[idx] - V[vb][:, None, :]
+                H = _local_hessian_rows(P, normals[vb], coords, rcond)  # (b, 3, k)
             r = (3 * vb[:, None, None] + np.arange(3)[None, :, None]) * np.ones((1, 1, k), int)
             c = np.broadcast_to(idx[:, None, :], H.shape)
             rows.append(r.ravel())

@@ -47,7 +47,27 @@ def cylinder_patch(nu, nv, angle=np.pi, r=1.0, h=2.0):
     return V3, F, S
 
 
+def folded_sheet(nx=12, ny=8, angle=np.pi / 2):
+    """A flat sheet folded along x = 0.5 by ``angle`` (developable, with a sharp crease);
+    returns V, F and its unfolded coordinates."""
+    V, F = grid(nx, ny)
+    x = V[:, 0]
+    fold = 0.5
+    V3 = np.c_[
+        np.where(x <= fold, x, fold + (x - fold) * np.cos(angle)),
+        V[:, 1],
+        np.where(x <= fold, 0.0, (x - fold) * np.sin(angle)),
+    ]
+    return V3, F, V[:, :2].copy()
+
+
+def rayleigh(K, M, f):
+    f = f - (M @ f).sum() / M.sum()
+    return (f @ K @ f) / (f @ M @ f)
+
+
 ENERGIES = [
+    ("hlle-intrinsic", lambda V, F: hlle_energy(V, F, coords="intrinsic")),
     ("hlle-normal", lambda V, F: hlle_energy(V, F, coords="normal")),
     ("hlle-projection", lambda V, F: hlle_energy(V, F, coords="projection")),
     ("hlle-chord", lambda V, F: hlle_energy(V, F, coords="chord")),
@@ -96,11 +116,12 @@ def test_scaling():
 @pytest.mark.parametrize(
     "name,energy,rq_max",
     [
+        ("hlle-intrinsic", lambda V, F: hlle_energy(V, F), 1e-10),
         ("hlle-normal", lambda V, F: hlle_energy(V, F, coords="normal"), 1e-5),
         ("hlle-projection", lambda V, F: hlle_energy(V, F, coords="projection"), 1e-2),
         ("curved", curved_hessian_energy, 1e-8),
     ],
-    ids=["hlle-normal", "hlle-projection", "curved"],
+    ids=["hlle-intrinsic", "hlle-normal", "hlle-projection", "curved"],
 )
 def test_cylinder_intrinsic_coordinates_are_near_null(name, energy, rq_max):
     """Developable chart: Rayleigh quotients of (s, z) are tiny next to the first non-affine
@@ -115,6 +136,22 @@ def test_cylinder_intrinsic_coordinates_are_near_null(name, energy, rq_max):
         f = f - (M @ f).sum() / M.sum()
         rq = (f @ K @ f) / (f @ M @ f)
         assert rq <= rq_max * first_nonaffine, (name, rq, first_nonaffine)
+
+
+def test_creased_developable_chart():
+    """A sheet folded by 90 degrees is intrinsically flat: the intrinsic HLLE and the curved
+    Hessian keep its unfolded coordinates in the null space; the tangent-plane variants of HLLE
+    (quadric fits across the crease) do not."""
+    V, F, S = folded_sheet()
+    M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).toarray()
+    for K in (hlle_energy(V, F), curved_hessian_energy(V, F)):
+        lam = sla.eigh(K.toarray(), M, eigvals_only=True)
+        assert lam[2] < 1e-8 * lam[3]
+        assert max(rayleigh(K, M, f) for f in S.T) < 1e-10 * lam[3]
+    for coords in ("projection", "normal"):
+        K = hlle_energy(V, F, coords=coords)
+        lam = sla.eigh(K.toarray(), M, eigvals_only=True)
+        assert rayleigh(K, M, S[:, 0]) > 1e-2 * lam[3]
 
 
 def test_hlle_normal_coordinates_converge_faster_than_projection():

@@ -20,7 +20,9 @@ from igl_heatseg.param import (
 ISOMETRY_TOL = 1e-8
 #: Rigid-motion fit of a cylinder patch's map to its developed rectangle, relative to its size.
 RECT_TOL_CURVED = 1e-8
-RECT_TOL_HLLE = 1e-4
+RECT_TOL_HLLE = 1e-8  # intrinsic local coordinates (the default)
+#: The same with the paper's tangent-plane projection (O(h^2) metric error).
+RECT_TOL_HLLE_PROJECTION = 1e-2
 
 
 def grid(nx, ny, sx=1.0, sy=1.0, jitter=0.0, seed=0):
@@ -97,6 +99,26 @@ def test_cylinder_patch_maps_to_rectangle(energy, tol):
     assert res.method == f"hessian-{energy}" and res.bijective
     size = np.ptp(T, axis=0).max()
     assert rigid_fit_error(res.UV, T) < tol * size
+
+
+def test_cylinder_patch_projection_coordinates_are_approximate():
+    V, F, T = cylinder_patch(36, 16)
+    res = parameterize_chart(V, F, "hlle", coords="projection")
+    err = rigid_fit_error(res.UV, T) / np.ptp(T, axis=0).max()
+    assert res.bijective
+    assert RECT_TOL_HLLE < err < RECT_TOL_HLLE_PROJECTION
+
+
+@pytest.mark.parametrize("energy", ["hlle", "curved"])
+def test_folded_sheet_unfolds_isometrically(energy):
+    """A developable chart with a 90-degree crease maps to the flat sheet."""
+    V, F = grid(12, 8)
+    x = V[:, 0]
+    V3 = np.c_[np.minimum(x, 0.5), V[:, 1], np.maximum(x - 0.5, 0.0)]
+    res = parameterize_chart(V3, F, energy)
+    assert res.method == f"hessian-{energy}" and res.bijective
+    assert np.abs(edge_lengths(res.UV, F) - edge_lengths(V3, F)).max() < ISOMETRY_TOL
+    assert rigid_fit_error(res.UV, V[:, :2]) < ISOMETRY_TOL
 
 
 def test_gram_correction_undoes_an_affine_map():

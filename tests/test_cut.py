@@ -5,6 +5,8 @@ from __future__ import annotations
 import igl
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from igl_heatseg.cut import (
     chart_topology,
@@ -533,3 +535,25 @@ def test_tetrahedron_is_cut_to_disk():
     assert res.method == "sphere-path"
     assert len(res.cut_edges) == 2
     assert_manifold_disk(res, 4)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    drop=st.floats(0.0, 0.45),
+    surface=st.sampled_from(["torus", "sphere", "plate"]),
+)
+def test_any_random_chart_becomes_a_manifold_disk(seed, drop, surface):
+    # Random face subsets: many holes, pinched vertices, handles kept or broken.
+    V, F = {"torus": torus, "sphere": lambda: icosphere(2), "plate": lambda: grid(12)}[surface]()
+    rng = np.random.default_rng(seed)
+    Fk = F[rng.random(len(F)) >= drop]
+    if len(Fk) == 0:
+        return
+    _, C = face_components(Fk)
+    Fc = Fk[C == np.bincount(C).argmax()]
+    res = cut_to_disk(V, Fc)
+    assert_manifold_disk(res, len(Fc))
+    np.testing.assert_allclose(res.V, V[res.vertex_map])
+    # corners keep their input vertex: same faces up to the duplication
+    np.testing.assert_array_equal(res.vertex_map[res.F], Fc)

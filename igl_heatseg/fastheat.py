@@ -1,0 +1,664 @@
+"""Fast heat-field labels for meshes with thousands of seed groups (issue 5).
+
+:class:`FastHeatSolver` has :class:`~igl_heatseg.heat.HeatSolver`'s interface and returns the
+same argmax labels, but never solves one global system per group.
+
+The problem (ALGORITHM.md §2): with ``A = -L`` (``L = igl.cotmatrix``, negative
+semidefinite) and ``f`` the free vertices, ``A_ff u_i = L_fs 1_{S_i}`` for every group ``i``.
+
+Two regimes
+-----------
+*Few groups* (``k * n_free <= exact_work``): one sparse Cholesky factorization of ``A_ff``
+(CHOLMOD through ``cholespy`` when installed, else SuperLU) and all ``k`` fields solved exactly
+in batches, reduced on the fly to the argmax as ``HeatSolver`` does.
+
+*Many groups* (noisy scans: thousands of one-vertex groups): local solves with certificates.
+
+1. Free vertices are cut into *patches* of about ``patch_size`` vertices (consecutive runs in
+   Morton order of their positions).  Each group is *owned* by the patch that holds most of the
+   free neighbours of its seeds.
+2. The *domain* ``D_c`` of patch ``c`` is the patch, plus the free neighbours of its groups'
+   seeds, grown by ``halo`` edge hops through free vertices.  One factorization of ``A_DD``
+   per patch; one right-hand side per owned group.  The result ``w_i`` solves the problem with
+   ``u = 0`` imposed on the free vertices outside ``D_c`` (``w_i = 0`` there).
+3. Truncation error.  ``e_i = u_i - w_i`` is harmonic in ``D_c`` with boundary values
+   ``u_i >= 0`` outside it.  When the cotangent weights are non-negative (``A_ff`` an
+   M-matrix, inverse entrywise ``>= 0``) every ``e_i >= 0``; and since ``sum_i u_i = 1``,
+   ``sum_i e_i = d := 1 - sum_i w_i``, so ``0 <= e_i(v) <= d(v)`` for every group at once.
+   Hence ``w_i(v) <= u_i(v) <= w_i(v) + d(v)``: a vertex whose best lower bound beats every
+   other group's upper bound is *certified*; faces likewise with the corner mean of ``d``.
+4. Everything not certified is recomputed exactly: the groups that could still win there
+   (upper bound >= best lower bound) are solved on the whole mesh with one global
+   factorization, and the argmax over them is taken from exact values.
+
+Real scans have a few negative cotangent weights (obtuse triangle pairs; iron.ply: 1.2 % of
+its edges), where the maximum principle and so the bound of step 3 may fail; fields there even
+go negative (down to -0.63 on iron.ply).  The certificate therefore demands a margin of
+``CERT_FACTOR * |d| + CERT_ABS`` instead of ``d``; agreement with the exact solver on real
+scans is measured by ``benchmarks/bench_heat.py`` and tested in ``tests/test_fastheat.py``.
+On meshes with non-negative weights the labels are those of the exact solve (ties aside:
+an exact tie is never certified and is decided by the exact fallback, lowest id first).
+
+Memory stays bounded: dense work arrays are ``|D_c| x (groups owned by c)`` per patch, plus
+``TOPK`` candidates per vertex and per face.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+from .constants import HEAT_SUM_TOL
+from .heat import HeatLabels
+from .topology import vertex_components
+
+__all__ = [
+    "FastHeatSolver",
+    "HALO_HOPS",
+    "PATCH_VERTICES",
+    "EXACT_WORK",
+    "TOPK",
+    "CERT_FACTOR",
+    "CERT_ABS",
+]
+
+log = logging.getLogger(__name__)
+
+#: Edge hops by which a patch's domain extends past its vertices and its groups' seeds.
+#: Fields of one-vertex groups on iron.ply fall by about 2x per hop (measured), so 10 hops
+#: leave about 1e-3 of the heat at the domain boundary.
+HALO_HOPS: int = 10
+
+#: Free vertices per patch.
+PATCH_VERTICES: int = 2000
+
+#: Use exact global solves when ``k * n_free`` is at most this (few groups).
+EXACT_WORK: float = 2.0e7
+
+#: Candidates (lower bounds) kept per vertex and per face.
+TOPK: int = 4
+
+#: A label is certified when its margin over every rival exceeds
+#: ``CERT_FACTOR * |d| + CERT_ABS`` (``d``: truncated heat, see the module docstring).
+#: ``CERT_FACTOR = 1`` is the bound for non-negative weights; 2 covers mild violations.
+CERT_FACTOR: float = 2.0
+
+#: Absolute margin covering round-off differences between two direct solves.
+CERT_ABS: float = 1e-9
+
+#: Right-hand sides per batch in exact solves (dense ``n_free x batch`` work arrays).
+_BATCH_BYTES = 128 * 2**20
+
+
+# ------------------------------------------------------------------------------------------
+# sparse factorization
+
+
+class _Factor:
+    """Sparse SPD factorization: CHOLMOD via cholespy if installed, else SuperLU."""
+
+    def __init__(self, A: sp.spmatrix) -> None:
+        A = sp.csr_matrix(A)
+        self.n = A.shape[0]
+        try:
+            import cholespy
+        except ImportError:  # soft dependency (extra "fast")
+            cholespy = None
+        if cholespy is not None:
+            A.sort_indices()
+            self._chol = cholespy.CholeskySolverD(
+                self.n,
+                A.indptr.astype(np.int32),
+                A.indices.astype(np.int32),
+                np.ascontiguousarray(A.data, dtype=np.float64),
+                cholespy.MatrixType.CSR,
+            )
+            self._lu = None
+        else:
+            self._chol = None
+            self._lu = sla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A")
+
+    def solve(self, B: np.ndarray) -> np.ndarray:
+        """Solve ``A X = B`` for ``B`` of shape (n,) or (n, r)."""
+        B = np.ascontiguousarray(B, dtype=np.float64)
+        if self._chol is not None:
+            X = np.empty_like(B)
+            self._chol.solve(B, X)
+            return X
+        return self._lu.solve(B)
+
+
+# ------------------------------------------------------------------------------------------
+# the solver
+
+
+class FastHeatSolver:
+    """Argmax labels of the heat fields of many seed groups, by certified local solves.
+
+    Same interface as :class:`~igl_heatseg.heat.HeatSolver`; see the module docstring for
+    the method.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+        Validated mesh.
+    group : (n,) int64
+        Seed group of each vertex, ``0..k-1``, or ``-1`` for a free vertex.  Every connected
+        component must hold a seed.
+    L : (n, n) sparse, optional
+        Cotangent Laplacian as from ``igl.cotmatrix`` (negative semidefinite).
+    halo : int
+        Hops by which patch domains are grown (default :data:`HALO_HOPS`).
+    patch_size : int
+        Free vertices per patch (default :data:`PATCH_VERTICES`).
+    exact_work : float
+        Solve all groups exactly when ``k * n_free <= exact_work`` (default
+        :data:`EXACT_WORK`); ``float("inf")`` forces exact solves, ``0`` local ones.
+
+    Attributes
+    ----------
+    k : int
+        Number of groups.
+    stats : dict
+        Filled by :meth:`labels`: ``mode`` (``"exact"`` or ``"local"``), ``patches``,
+        ``domain_vertices`` (sum of domain sizes), ``uncertified_vertices``,
+        ``uncertified_faces``, ``fallback_groups`` (groups solved exactly), and timings.
+
+    Raises
+    ------
+    ValueError
+        If some connected component holds no seed.
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V, F = igl.triangulated_grid(5, 5)
+    >>> V = np.c_[V, np.zeros(len(V))]
+    >>> group = -np.ones(len(V), dtype=np.int64); group[0] = 0; group[-1] = 1
+    >>> hl = FastHeatSolver(V, F, group).labels()
+    >>> int(hl.vertex_labels[0]), int(hl.vertex_labels[-1])
+    (0, 1)
+    """
+
+    def __init__(
+        self,
+        V: np.ndarray,
+        F: np.ndarray,
+        group: np.ndarray,
+        L: sp.spmatrix | None = None,
+        *,
+        halo: int = HALO_HOPS,
+        patch_size: int = PATCH_VERTICES,
+        exact_work: float = EXACT_WORK,
+    ) -> None:
+        self.V, self.F = V, F
+        self.n = V.shape[0]
+        self.group = np.asarray(group, dtype=np.int64)
+        self.known = np.flatnonzero(self.group >= 0)
+        self.k = int(self.group.max()) + 1 if len(self.known) else 0
+        ncomp, comp = vertex_components(self.n, F)
+        seeded = np.zeros(ncomp, dtype=bool)
+        seeded[comp[self.known]] = True
+        if not seeded.all():
+            bad = np.flatnonzero(~seeded)
+            raise ValueError(
+                f"{len(bad)} connected component(s) hold no seed vertex (e.g. the one with "
+                f"vertex {int(np.flatnonzero(comp == bad[0])[0])}); their heat problem is "
+                "singular"
+            )
+        self.halo = int(halo)
+        self.patch_size = int(patch_size)
+        self.exact_work = float(exact_work)
+        if L is None:
+            L = igl.cotmatrix(V, F)
+        self.L = sp.csr_matrix(L)
+        self.free = np.flatnonzero(self.group < 0)
+        self.nf = len(self.free)
+        self._fidx = np.full(self.n, -1, dtype=np.int64)
+        self._fidx[self.free] = np.arange(self.nf)
+        Lf = self.L[self.free]
+        self._A = sp.csr_matrix(-Lf[:, self.free])  # A_ff, (nf, nf), SPD
+        # B[:, i] = L_fs 1_{S_i}: right-hand side of group i, (nf, k) sparse.
+        G = sp.csr_matrix(
+            (np.ones(len(self.known)), (np.arange(len(self.known)), self.group[self.known])),
+            shape=(len(self.known), self.k),
+        )
+        self._B = sp.csc_matrix(Lf[:, self.known] @ G)
+        self._factor: _Factor | None = None
+        self.stats: dict = {}
+
+    # -- exact fields ----------------------------------------------------------------------
+
+    def _global_factor(self) -> _Factor:
+        if self._factor is None:
+            t = time.perf_counter()
+            try:
+                self._factor = _Factor(self._A)
+            except RuntimeError as exc:
+                raise ValueError(
+                    f"factorization of the heat system failed ({len(self.known)} seeds, "
+                    f"{self.nf} free vertices): {exc}"
+                ) from exc
+            self.stats["global_factor_s"] = time.perf_counter() - t
+        return self._factor
+
+    def _free_fields(self, groups: np.ndarray) -> np.ndarray:
+        """Exact fields of ``groups`` on the free vertices, shape (nf, len(groups))."""
+        if self.nf == 0 or len(groups) == 0:
+            return np.zeros((self.nf, len(groups)))
+        return self._global_factor().solve(self._B[:, groups].toarray())
+
+    def temperatures(self, groups: Sequence[int]) -> np.ndarray:
+        """Exact temperature fields of the given groups (one global factorization).
+
+        Parameters
+        ----------
+        groups : sequence of int
+            Group ids in ``0..k-1``.
+
+        Returns
+        -------
+        U : (n, len(groups)) float64
+            ``U[:, j]`` is 1 on the seeds of ``groups[j]``, 0 on every other seed, harmonic
+            (``L u = 0``) on free vertices.
+        """
+        groups = np.asarray(groups, dtype=np.int64).reshape(-1)
+        U = np.zeros((self.n, len(groups)))
+        U[self.known] = (self.group[self.known][:, None] == groups[None, :]).astype(np.float64)
+        U[self.free] = self._free_fields(groups)
+        return U
+
+    def temperature(self, i: int) -> np.ndarray:
+        """One exact temperature field ``u_i``, shape (n,)."""
+        return self.temperatures([i])[:, 0]
+
+    # -- labels ----------------------------------------------------------------------------
+
+    def labels(self, progress: Callable[[float], None] | None = None) -> HeatLabels:
+        """Argmax labels over all groups.
+
+        Parameters
+        ----------
+        progress : callable, optional
+            Called with the fraction of work done, in ``(0, 1]``.
+
+        Returns
+        -------
+        HeatLabels
+            ``vertex_labels`` and ``face_labels`` as :meth:`HeatSolver.labels` (argmax of
+            the vertex fields, and of their corner mean per face; ties to the lowest id).
+            ``vertex_max`` is exact in the exact mode and where the fallback ran, else the
+            certified lower bound ``w`` (exact up to the truncated heat ``d``).
+            ``sum_error`` is ``max |sum_i u_i - 1|`` in the exact mode; in the local mode
+            the largest relative residual ``|A_DD W - B| / |B|`` of the patch solves and the
+            fallback's solves (the sum identity does not hold for truncated fields).
+        """
+        t0 = time.perf_counter()
+        self.stats = {}
+        if self.k * self.nf <= self.exact_work or self.nf == 0:
+            hl = self._labels_exact(progress)
+        else:
+            hl = self._labels_local(progress)
+        self.stats["labels_s"] = time.perf_counter() - t0
+        if hl.sum_error > HEAT_SUM_TOL:
+            log.warning(
+                "heat solve check failed: error %.3g (tolerance %.1g)", hl.sum_error, HEAT_SUM_TOL
+            )
+        return hl
+
+    def _labels_exact(self, progress) -> HeatLabels:
+        self.stats["mode"] = "exact"
+        n, F = self.n, self.F
+        m = F.shape[0]
+        batch = int(np.clip(_BATCH_BYTES // (8 * (2 * n + m)), 1, 256))
+        vmax = np.full(n, -np.inf)
+        varg = np.zeros(n, dtype=np.int64)
+        fmax = np.full(m, -np.inf)
+        farg = np.zeros(m, dtype=np.int64)
+        usum = np.zeros(n)
+        for g0 in range(0, self.k, batch):
+            g1 = min(self.k, g0 + batch)
+            U = self.temperatures(np.arange(g0, g1))
+            usum += U.sum(axis=1)
+            _argmax_update(U, g0, vmax, varg)
+            Uf = (U[F[:, 0]] + U[F[:, 1]] + U[F[:, 2]]) / 3.0
+            _argmax_update(Uf, g0, fmax, farg)
+            if progress is not None:
+                progress(g1 / self.k)
+        err = float(np.abs(usum - 1.0).max()) if n else 0.0
+        self.stats["fallback_groups"] = self.k
+        return HeatLabels(vertex_labels=varg, face_labels=farg, vertex_max=vmax, sum_error=err)
+
+    def _labels_local(self, progress) -> HeatLabels:
+        st = self.stats
+        st["mode"] = "local"
+        V, F, n, nf, k = self.V, self.F, self.n, self.nf, self.k
+        m = F.shape[0]
+        group, free, fidx = self.group, self.free, self._fidx
+        A, B = self._A, self._B
+        K = TOPK
+
+        t = time.perf_counter()
+        # 1. Patches: runs of patch_size free vertices in Morton order.
+        order = np.argsort(_morton(V[free]), kind="stable")
+        npatch = max(1, -(-nf // self.patch_size))
+        patch = np.empty(nf, dtype=np.int64)
+        patch[order] = np.arange(nf) * npatch // nf
+        # Owner of each group: the patch holding most free neighbours of its seeds.
+        Bc = B.tocoo()
+        pair = sp.coo_matrix(
+            (np.ones(Bc.nnz), (Bc.col, patch[Bc.row])), shape=(k, npatch)
+        ).tocsr()
+        owner = np.asarray(pair.argmax(axis=1)).ravel()
+        owner[np.diff(pair.indptr) == 0] = -1  # group with no free neighbour
+        # 2. Domains: (nf, npatch) pattern grown by `halo` hops through free vertices.
+        X = sp.csr_matrix(
+            (
+                np.ones(nf + Bc.nnz, dtype=np.int8),
+                (np.r_[np.arange(nf), Bc.row], np.r_[patch, owner[Bc.col]]),
+            ),
+            shape=(nf, npatch),
+        )
+        X.sum_duplicates()
+        X.data[:] = 1
+        P = sp.csr_matrix(A, dtype=np.int8, copy=True)
+        P.data[:] = 1
+        for _ in range(self.halo):
+            X = X + P @ X
+            X.data[:] = 1
+        X = X.tocsc()
+        X.sort_indices()
+        st["patches"] = npatch
+        st["domain_vertices"] = int(X.nnz)
+        st["setup_s"] = time.perf_counter() - t
+
+        # Incidence free vertex -> faces, for the faces each domain touches.
+        fc = fidx[F]  # (m, 3) free index of each corner or -1
+        rows = fc.ravel()
+        sel = rows >= 0
+        VFf = sp.csr_matrix(
+            (np.ones(int(sel.sum()), dtype=np.int8), (rows[sel], np.repeat(np.arange(m), 3)[sel])),
+            shape=(nf, m),
+        )
+        # Running top-K lower bounds per free vertex and per face.
+        vval = np.full((nf, K), -np.inf)
+        vid = np.full((nf, K), -1, dtype=np.int64)
+        vexc = np.zeros(nf)  # bound on every group not kept (absent groups: w = 0)
+        wsum = np.zeros(nf)
+        fval = np.full((m, K), -np.inf)
+        fid = np.full((m, K), -1, dtype=np.int64)
+        fexc = np.zeros(m)
+        resid = 0.0
+
+        t = time.perf_counter()
+        owned = np.argsort(owner, kind="stable")
+        bounds = np.searchsorted(owner[owned], np.arange(npatch + 1) - 0.5)
+        ownerless = owned[: bounds[0]]
+        for c in range(npatch):
+            gids = owned[bounds[c] : bounds[c + 1]]  # sorted by group id (stable sort)
+            if len(gids) == 0:
+                continue
+            D = X.indices[X.indptr[c] : X.indptr[c + 1]]
+            ADD = A[D][:, D]
+            BD = B[D][:, gids].toarray()
+            W = _Factor(ADD).solve(BD)
+            if W.ndim == 1:
+                W = W[:, None]
+            bn = np.abs(BD).max()
+            if bn > 0:
+                resid = max(resid, float(np.abs(ADD @ W - BD).max() / bn))
+            wsum[D] += W.sum(axis=1)
+            tv, ti, tx = _topk_rows(W, K)  # patch-local top-K per domain vertex
+            _merge_topk(vval, vid, vexc, D, tv, gids[ti], tx)
+            # Faces with a free corner in D.  Candidates: the groups in the local top-K of
+            # their free corners and the groups of their seed corners; every other group of
+            # this patch is below the corner mean of the local (K+1)-th values.
+            faces = np.unique(VFf[D].indices)
+            nD, kc = W.shape
+            loc = np.full(nf, nD, dtype=np.int64)
+            loc[D] = np.arange(nD)
+            Wz = np.vstack([W, np.zeros((1, kc))])
+            gpos = np.full(k, -1, dtype=np.int64)
+            gpos[gids] = np.arange(kc)
+            cf = fc[faces]  # free index of corners, -1 at seeds
+            lc = np.where(cf >= 0, loc[np.maximum(cf, 0)], nD)  # row in Wz (nD: value 0)
+            sg = np.where(cf < 0, gpos[np.maximum(group[F[faces]], 0)], -1)  # own seed groups
+            tiz = np.vstack([ti, np.zeros((1, K), dtype=np.int64)])
+            txz = np.r_[tx, 0.0]
+            cand = np.concatenate([tiz[lc[:, 0]], tiz[lc[:, 1]], tiz[lc[:, 2]], sg], axis=1)
+            cand = np.sort(cand, axis=1)
+            dup = np.zeros(cand.shape, dtype=bool)
+            dup[:, 1:] = cand[:, 1:] == cand[:, :-1]
+            dup |= cand < 0
+            cz = np.maximum(cand, 0)
+            isseed = (sg[:, :, None] == cz[:, None, :]) & (sg[:, :, None] >= 0)  # (r,3,c)
+            val = (
+                Wz[lc[:, 0:1], cz] + Wz[lc[:, 1:2], cz] + Wz[lc[:, 2:3], cz] + isseed.sum(axis=1)
+            ) / 3.0
+            val[dup] = -np.inf
+            rest = (txz[lc[:, 0]] + txz[lc[:, 1]] + txz[lc[:, 2]]) / 3.0
+            fv, fi, fx = _topk_rows(val, K)
+            _merge_topk(fval, fid, fexc, faces, fv, gids[np.take_along_axis(cz, fi, 1)],
+                        np.maximum(fx, rest))
+            if progress is not None:
+                progress(0.9 * (c + 1) / npatch)
+        st["patch_solves_s"] = time.perf_counter() - t
+        if len(ownerless):
+            log.debug("%d groups touch no free vertex", len(ownerless))
+
+        t = time.perf_counter()
+        # 3. Certificates.
+        d = 1.0 - wsum  # truncated heat per free vertex
+        slack_v = CERT_FACTOR * np.abs(d) + CERT_ABS
+        rival_v = np.maximum(vval[:, 1], vexc)
+        unc_v = ~(vval[:, 0] - rival_v > slack_v)
+        # Faces: corner mean of |d| (0 at seeds); all-seed faces are exact.
+        dab = np.zeros(n)
+        dab[free] = np.abs(d)
+        slack_f = CERT_FACTOR * (dab[F[:, 0]] + dab[F[:, 1]] + dab[F[:, 2]]) / 3.0 + CERT_ABS
+        has_free = (fc >= 0).any(axis=1)
+        rival_f = np.maximum(fval[:, 1], fexc)
+        unc_f = has_free & ~(fval[:, 0] - rival_f > slack_f)
+
+        vertex_labels = group.copy()
+        vertex_max = np.ones(n)
+        vertex_labels[free] = vid[:, 0]
+        vertex_max[free] = vval[:, 0]
+        face_labels = fid[:, 0].copy()
+        # Faces whose corners are all seeds: exact corner counts, ties to the lowest id.
+        allseed = np.flatnonzero(~has_free)
+        if len(allseed):
+            face_labels[allseed] = _seed_face_labels(group[F[allseed]])
+
+        # 4. Exact fallback for the uncertified.
+        uv = np.flatnonzero(unc_v)
+        uf = np.flatnonzero(unc_f)
+        st["uncertified_vertices"] = len(uv)
+        st["uncertified_faces"] = len(uf)
+        cand_v = (vval[uv] + slack_v[uv, None] >= vval[uv, :1]) & (vid[uv] >= 0)
+        cand_f = (fval[uf] + slack_f[uf, None] >= fval[uf, :1]) & (fid[uf] >= 0)
+        cands = np.union1d(vid[uv][cand_v], fid[uf][cand_f])
+        # If a rival outside the kept candidates may win, every group is a candidate there.
+        open_v = vexc[uv] + slack_v[uv] >= vval[uv, 0]
+        open_f = fexc[uf] + slack_f[uf] >= fval[uf, 0]
+        if open_v.any() or open_f.any():
+            lost = (vid[uv[open_v], 0] < 0).any() or (fid[uf[open_f], 0] < 0).any()
+            if lost:  # some vertex or face lies in no domain: anything may win there
+                log.warning("vertices or faces outside every patch domain: solving all groups")
+                more = np.arange(k)
+            else:
+                more = self._groups_near(X, owned, bounds, uv[open_v], uf[open_f], fc)
+            cands = np.union1d(cands, more)
+        st["fallback_groups"] = len(cands)
+        st["certify_s"] = time.perf_counter() - t
+        t = time.perf_counter()
+        if len(cands):
+            rv_free = uv
+            fcorn = F[uf]
+            need = np.unique(np.r_[free[rv_free], fcorn.ravel()])
+            best_v = np.full(len(uv), -np.inf)
+            arg_v = np.zeros(len(uv), dtype=np.int64)
+            best_f = np.full(len(uf), -np.inf)
+            arg_f = np.zeros(len(uf), dtype=np.int64)
+            pos = np.full(n, -1, dtype=np.int64)
+            pos[need] = np.arange(len(need))
+            batch = int(np.clip(_BATCH_BYTES // (8 * max(nf, 1)), 1, 256))
+            for j0 in range(0, len(cands), batch):
+                gs = cands[j0 : j0 + batch]
+                Uf = self._free_fields(gs)
+                Bg = B[:, gs].toarray()
+                bn = np.abs(Bg).max()
+                if bn > 0:
+                    resid = max(resid, float(np.abs(A @ Uf - Bg).max() / bn))
+                U = np.zeros((len(need), len(gs)))
+                isf = fidx[need] >= 0
+                U[isf] = Uf[fidx[need[isf]]]
+                U[~isf] = (group[need[~isf]][:, None] == gs[None, :]).astype(np.float64)
+                _argmax_update_ids(U[pos[free[uv]]], gs, best_v, arg_v)
+                Pf = pos[fcorn]
+                Wf = (U[Pf[:, 0]] + U[Pf[:, 1]] + U[Pf[:, 2]]) / 3.0
+                _argmax_update_ids(Wf, gs, best_f, arg_f)
+            vertex_labels[free[uv]] = arg_v
+            vertex_max[free[uv]] = best_v
+            face_labels[uf] = arg_f
+        st["fallback_s"] = time.perf_counter() - t
+        if progress is not None:
+            progress(1.0)
+        log.info(
+            "local heat labels: %d patches, %d domain vertices, %d/%d vertices and %d/%d faces "
+            "uncertified, %d groups solved exactly",
+            npatch, X.nnz, len(uv), nf, len(uf), m, len(cands),
+        )
+        return HeatLabels(
+            vertex_labels=vertex_labels,
+            face_labels=face_labels,
+            vertex_max=vertex_max,
+            sum_error=resid,
+        )
+
+    def _groups_near(self, X, owned, bounds, fv, ff, fc) -> np.ndarray:
+        """Groups owned by patches whose domain holds the given free vertices / face corners."""
+        verts = np.unique(np.r_[fv, fc[ff].ravel()])
+        verts = verts[verts >= 0]
+        Xr = X.tocsr()
+        patches = np.unique(Xr[verts].indices)
+        out = [owned[bounds[c] : bounds[c + 1]] for c in patches]
+        res = np.unique(np.concatenate(out)) if out else np.zeros(0, dtype=np.int64)
+        log.warning(
+            "%d vertices/faces have rivals outside their %d kept candidates; solving %d groups "
+            "exactly", len(fv) + len(ff), TOPK, len(res),
+        )
+        return res
+
+
+# ------------------------------------------------------------------------------------------
+# helpers
+
+
+def _morton(P: np.ndarray, bits: int = 21) -> np.ndarray:
+    """Morton (Z-order) codes of points, shape (len(P),) uint64."""
+    if len(P) == 0:
+        return np.zeros(0, dtype=np.uint64)
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    q = ((P - lo) / np.maximum(hi - lo, 1e-300).max() * ((1 << bits) - 1)).astype(np.uint64)
+    code = np.zeros(len(P), dtype=np.uint64)
+    for b in range(bits):
+        for a in range(3):
+            code |= ((q[:, a] >> np.uint64(b)) & np.uint64(1)) << np.uint64(3 * b + a)
+    return code
+
+
+def _topk_rows(M: np.ndarray, K: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Largest ``K`` entries of each row and a bound on the rest.
+
+    Parameters
+    ----------
+    M : (r, c) float64
+
+    Returns
+    -------
+    val : (r, K) float64
+        Decreasing; ``-inf`` where the row has fewer than ``K`` entries.
+    idx : (r, K) int64
+        Their columns (0 where ``val`` is ``-inf``).
+    rest : (r,) float64
+        Largest entry not returned (``-inf`` if none).
+    """
+    r, c = M.shape
+    val = np.full((r, K), -np.inf)
+    idx = np.zeros((r, K), dtype=np.int64)
+    ar = np.arange(r)
+    if c <= K:
+        o = np.argsort(-M, axis=1, kind="stable")
+        val[:, :c] = np.take_along_axis(M, o, axis=1)
+        idx[:, :c] = o
+        return val, idx, np.full(r, -np.inf)
+    M = M.copy()
+    for j in range(K):  # K argmax passes: much faster than argpartition for small K
+        a = M.argmax(axis=1)
+        idx[:, j] = a
+        val[:, j] = M[ar, a]
+        M[ar, a] = -np.inf
+    return val, idx, M.max(axis=1)
+
+
+def _merge_topk(
+    val: np.ndarray, ids: np.ndarray, exc: np.ndarray, rows: np.ndarray, bv: np.ndarray,
+    bi: np.ndarray, bx: np.ndarray,
+) -> None:
+    """Fold a block's top-K lower bounds into running top-K lists.
+
+    ``val, ids`` (N, K) hold the K largest values seen per row (decreasing) and their group
+    ids; ``exc`` (N,) bounds every value seen but not kept.  ``bv, bi`` (len(rows), K) are a
+    block's top-K values and group ids on ``rows``, ``bx`` (len(rows),) a bound on the rest
+    of the block.
+    """
+    K = val.shape[1]
+    cv = np.concatenate([val[rows], bv], axis=1)
+    ci = np.concatenate([ids[rows], bi], axis=1)
+    o = np.argsort(-cv, axis=1, kind="stable")
+    cv = np.take_along_axis(cv, o, axis=1)
+    val[rows] = cv[:, :K]
+    ids[rows] = np.take_along_axis(ci, o[:, :K], axis=1)
+    exc[rows] = np.maximum(np.maximum(exc[rows], cv[:, K]), bx)
+
+
+def _seed_face_labels(Gc: np.ndarray) -> np.ndarray:
+    """Face label of faces whose three corners are seeds: the group with most corners.
+
+    ``Gc`` (r, 3) corner groups.  Ties (three different groups) go to the lowest id, as the
+    exact argmax of the corner means (1/3 each) does.
+    """
+    a, b, c = Gc[:, 0], Gc[:, 1], Gc[:, 2]
+    lab = np.minimum(np.minimum(a, b), c)
+    lab = np.where(b == c, b, lab)
+    lab = np.where(a == c, a, lab)
+    lab = np.where(a == b, a, lab)
+    return lab
+
+
+def _argmax_update(U: np.ndarray, offset: int, best: np.ndarray, arg: np.ndarray) -> None:
+    """Fold a batch of columns into a running argmax; earlier (lower) ids win ties."""
+    j = U.argmax(axis=1)
+    val = U[np.arange(U.shape[0]), j]
+    upd = val > best
+    best[upd] = val[upd]
+    arg[upd] = j[upd] + offset
+
+
+def _argmax_update_ids(U: np.ndarray, gids: np.ndarray, best: np.ndarray, arg: np.ndarray) -> None:
+    """Running argmax over columns with increasing group ids ``gids``; lower ids win ties."""
+    if U.shape[0] == 0:
+        return
+    j = U.argmax(axis=1)
+    val = U[np.arange(U.shape[0]), j]
+    upd = val > best
+    best[upd] = val[upd]
+    arg[upd] = gids[j[upd]]

@@ -37,6 +37,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import sys
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -91,6 +92,12 @@ BACKEND_ENV: str = "IGL_HEATSEG_PS_BACKEND"
 
 #: Backend used for headless rendering when neither the argument nor the environment names one.
 HEADLESS_BACKEND: str = "openGL3_egl"
+
+#: polyscope backends (``"auto"`` lets polyscope choose).
+BACKENDS: tuple[str, ...] = ("auto", "openGL3_glfw", "openGL3_egl", "openGL_mock")
+
+#: What to install when EGL is missing (Debian/Ubuntu).
+EGL_HINT: str = "apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri"
 
 #: Default picture size in pixels (width, height).
 DEFAULT_SIZE: tuple[int, int] = (1200, 900)
@@ -177,6 +184,11 @@ def init_polyscope(backend: str | None = None, *, headless: bool = False) -> Any
     ps = _polyscope()
     if backend is None:
         backend = os.environ.get(BACKEND_ENV) or (HEADLESS_BACKEND if headless else None)
+    if backend and backend not in BACKENDS:
+        raise ValueError(
+            f"unknown polyscope backend {backend!r} (argument or ${BACKEND_ENV}); "
+            f"use one of {BACKENDS}"
+        )
     if not ps.is_initialized():
         ps.set_use_prefs_file(False)
         ps.set_program_name("igl-heatseg")
@@ -184,10 +196,13 @@ def init_polyscope(backend: str | None = None, *, headless: bool = False) -> Any
         ps.set_errors_throw_exceptions(True)
         ps.set_allow_headless_backends(True)
         t = time.perf_counter()
-        if backend:
-            ps.init(backend)
-        else:
-            ps.init()
+        try:
+            ps.init(backend or "auto")
+        except Exception as exc:  # polyscope raises RuntimeError (or a C++ exception type)
+            raise RuntimeError(
+                f"polyscope could not start the {backend or 'default'} backend: {exc}. "
+                f"Headless rendering needs EGL with Mesa ({EGL_HINT})"
+            ) from exc
         log.info(
             "polyscope initialised (%s) in %.2f s",
             ps.get_render_engine_backend_name(),
@@ -856,6 +871,37 @@ def best_view_direction(
     return best_d
 
 
+def _centre_offset(x: np.ndarray, depth_of, lo: float, hi: float) -> float:
+    """Lateral camera offset ``c`` with ``max((x - c)/depth) = -min((x - c)/depth)`` (bisection)."""
+    for _ in range(60):
+        c = 0.5 * (lo + hi)
+        r = (x - c) / depth_of
+        if r.max() + r.min() > 0:
+            lo = c
+        else:
+            hi = c
+    return 0.5 * (lo + hi)
+
+
+def _fit_frustum(x, y, z, tx, ty, margin, iterations: int = 4):
+    """Camera distance along +z and lateral offsets so that every point is in view, centred.
+
+    ``x, y, z``: point coordinates in the camera frame (z towards the camera); ``tx, ty``: the
+    tangents of the half fields of view.  Returns ``(dist, cx, cy)``.
+    """
+    cx, cy = 0.5 * (x.max() + x.min()), 0.5 * (y.max() + y.min())
+    dist = 0.0
+    for _ in range(iterations):
+        dist = float(np.max(np.maximum(z + np.abs(x - cx) / tx, z + np.abs(y - cy) / ty)))
+        dist *= margin
+        depth = dist - z
+        cx = _centre_offset(x, depth, float(x.min()), float(x.max()))
+        cy = _centre_offset(y, depth, float(y.min()), float(y.max()))
+    # final distance for the final offsets
+    dist = margin * float(np.max(np.maximum(z + np.abs(x - cx) / tx, z + np.abs(y - cy) / ty)))
+    return dist, cx, cy
+
+
 def three_quarter_camera(
     P: ArrayLike,
     aspect: float = DEFAULT_SIZE[0] / DEFAULT_SIZE[1],
@@ -917,10 +963,8 @@ def three_quarter_camera(
             up = -up
         right = np.cross(up, d)
         x, y, z = Q @ right, Q @ up, Q @ d
-        # Centre the (near-orthographic) image of the part.
-        cx, cy = 0.5 * (x.max() + x.min()), 0.5 * (y.max() + y.min())
-        dist = float(np.max(np.maximum(z + np.abs(x - cx) / tx, z + np.abs(y - cy) / ty)))
-        dist = max(dist * margin, 1e-12 + float(np.abs(Q).max()))
+        dist, cx, cy = _fit_frustum(x, y, z, tx, ty, margin)
+        dist = max(dist, 1e-12 + float(np.abs(Q).max()))
         if best is None or dist < best[0] * (1 - 1e-6):
             best = (dist, up, cx * right + cy * up)
     dist, up, shift = best
@@ -1222,6 +1266,8 @@ def register(subparsers) -> None:
         From ``parser.add_subparsers()``; each subcommand sets ``func`` (``args -> int``).
     """
 
+    from .cli import add_segment_arguments
+
     def common(p, with_stage=True):
         p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
         if with_stage:
@@ -1230,10 +1276,7 @@ def register(subparsers) -> None:
             p.add_argument("--segment", type=int, default=None,
                            help="segment whose temperature field --stage temperature shows "
                            "(0 = largest; default: the one seen best)")
-        p.add_argument("--theta", type=float, default=THETA_DEFAULT,
-                       help=f"dihedral threshold in radians (default pi/20 = {THETA_DEFAULT:.4f})")
-        p.add_argument("--eps", type=float, default=EPS_DEFAULT,
-                       help=f"area fraction of the eps round (default {EPS_DEFAULT})")
+        add_segment_arguments(p)
 
     p = subparsers.add_parser("view", help="open the polyscope viewer on one stage",
                               description="Segment MESH and show a stage in polyscope.")
@@ -1277,8 +1320,12 @@ def _cli_view(args) -> int:
 
 def _cli_render(args) -> int:
     _check_params(args)
-    out = render(args.mesh, args.output, args.stage, tuple(args.size), args.theta, args.eps,
-                 segment=args.segment)
+    try:
+        out = render(args.mesh, args.output, args.stage, tuple(args.size), args.theta, args.eps,
+                     segment=args.segment)
+    except RuntimeError as exc:  # no EGL: one line, not a traceback
+        sys.stderr.write(f"igl-heatseg: error: {exc}\n")
+        return 1
     log.info("wrote %s", out["png"])
     return 0
 

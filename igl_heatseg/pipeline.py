@@ -194,6 +194,7 @@ def run_pipeline(
     progress=None,
     extra: dict | None = None,
     t_start: float | None = None,
+    pictures: bool = False,
 ) -> PipelineResult:
     """Segment, cut, parameterize, pack and (optionally) write a mesh.
 
@@ -221,6 +222,10 @@ def run_pipeline(
         More entries for ``report.json``.
     t_start : float, optional
         ``time.perf_counter()`` at the start of the job (for ``timings["total"]``).
+    pictures : bool
+        Also write ``segmentation.png`` and ``checker.png`` into ``out_dir``
+        (:func:`igl_heatseg.viz.write_run_pictures`; skipped with a warning when polyscope or
+        an OpenGL context is missing).
 
     Returns
     -------
@@ -404,6 +409,17 @@ def run_pipeline(
                 )
         write_atlas_obj(out / "atlas.obj", V, F, corner_uv)
         report["timings"]["write_charts"] = time.perf_counter() - t
+        if pictures:
+            t = time.perf_counter()
+            try:
+                from .viz import write_run_pictures
+
+                written = write_run_pictures(out, mesh, seg, charts)
+            except ImportError as exc:  # viz needs the `viz` extra
+                log.warning("no pictures: %s", exc)
+                written = {}
+            report["pictures"] = sorted(p.name for p in written.values())
+            report["timings"]["pictures"] = time.perf_counter() - t
         report = write_segmentation(out, mesh, seg, report, t_start=t0)
     else:
         report["timings"]["total"] = time.perf_counter() - t0
@@ -438,6 +454,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         progress=progress,
         extra={"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}},
         t_start=t0,
+        pictures=args.pictures,
     )
     s = res.report["parameterization"]
     sys.stderr.write(
@@ -455,7 +472,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    """Add ``igl-heatseg run MESH -o DIR [--theta] [--eps] [--energy] [--cut] [--cut-path]``.
+    """Add ``igl-heatseg run MESH -o DIR [--theta] [--eps] [--energy] [--cut] [--cut-path] ...``.
 
     Parameters
     ----------
@@ -496,6 +513,11 @@ def register(subparsers) -> None:
         metavar="V0:V1",
         help="cut the chart holding input vertices V0 and V1 along the shortest path between "
         "them (the ends of a generatrix, paper §3.5); repeatable",
+    )
+    p.add_argument(
+        "--pictures",
+        action="store_true",
+        help="also render segmentation.png and checker.png (needs the `viz` extra and OpenGL)",
     )
     p.add_argument(
         "--progress",

@@ -195,3 +195,11 @@ def test_cli_main_run_and_bad_cut_path(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and "99999 is outside" in err[0]
+
+
+def test_run_with_pictures(can_mesh, tmp_path):
+    pytest.importorskip("polyscope")
+    res = run_pipeline(can_mesh, tmp_path, pictures=True)
+    # Rendering may be impossible here (no OpenGL): then it is skipped, never fatal.
+    for name in res.report["pictures"]:
+        assert (tmp_path / name).stat().st_size > 0

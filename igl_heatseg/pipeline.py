@@ -304,6 +304,7 @@ def run_pipeline(
         ch.report["cut_method"] = res.method if res is not None else "none"
         ch.report["cut_length"] = float(res.cut_length) if res is not None else 0.0
         ch.report["cut_edges"] = int(len(res.cut_edges)) if res is not None else 0
+        ch.report["cut_seconds"] = secs_cut
         ch.report["cut_paths"] = [
             [int(mesh.input_vertex[v]) for v in (p[0], p[-1])] for p in (res.paths if res else [])
         ]

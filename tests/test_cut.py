@@ -557,3 +557,23 @@ def test_any_random_chart_becomes_a_manifold_disk(seed, drop, surface):
     np.testing.assert_allclose(res.V, V[res.vertex_map])
     # corners keep their input vertex: same faces up to the duplication
     np.testing.assert_array_equal(res.vertex_map[res.F], Fc)
+
+
+def test_annulus_cut_is_the_shortest_loop_to_loop_path():
+    # Irregular annulus (jittered rings): the cut equals the multi-source Dijkstra minimum
+    # from one loop to the other.
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import dijkstra
+
+    rng = np.random.default_rng(7)
+    V, F = flat_annulus(nu=48, nr=9, r0=1.0, r1=3.0)
+    inner = np.arange(48, len(V) - 48)
+    V[inner, :2] += rng.uniform(-0.04, 0.04, (len(inner), 2))
+    res = cut_to_disk(V, F)
+    assert res.method == "annulus"
+    assert_manifold_disk(res, len(F))
+    E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), 1), axis=0)
+    w = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    G = sp.csr_matrix((w, (E[:, 0], E[:, 1])), shape=(len(V), len(V)))
+    d = dijkstra(G, directed=False, indices=np.arange(48), min_only=True)
+    assert res.cut_length == pytest.approx(d[-48:].min(), rel=1e-12)

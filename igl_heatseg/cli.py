@@ -25,7 +25,12 @@ __all__ = ["main", "Progress", "write_segmentation"]
 log = logging.getLogger("igl_heatseg")
 
 #: Modules that add subcommands (each has ``register(subparsers)``), besides ``segment``.
-_COMMAND_MODULES = ("igl_heatseg.pipeline", "igl_heatseg.evaluate")
+_COMMAND_MODULES = (
+    "igl_heatseg.pipeline",
+    "igl_heatseg.compare",
+    "igl_heatseg.evaluate",
+    "igl_heatseg.viz",
+)
 
 #: Meshes with at least this many faces get a progress display on stderr by default.
 PROGRESS_MIN_FACES = 50_000

@@ -101,6 +101,12 @@ def _face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
+def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
+    a = UV[F[:, 1]] - UV[F[:, 0]]
+    b = UV[F[:, 2]] - UV[F[:, 0]]
+    return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
+
+
 def parse_cut_path(text: str) -> tuple[int, int]:
     """Parse ``"V0:V1"`` (two input vertex ids) for ``--cut-path``.
 
@@ -353,7 +359,16 @@ def run_pipeline(
 
     # 3. pack
     t = time.perf_counter()
-    done = [ch for ch in charts if ch.param is not None]
+    done = []
+    for ch in charts:
+        if ch.param is None:
+            continue
+        UV = ch.param.UV
+        if np.isfinite(UV).all() and _uv_area(UV, ch.cut.F) > 0:
+            done.append(ch)
+        else:  # a degenerate map (possible only when no fallback is used) cannot be packed
+            ch.report["atlas_error"] = "degenerate or non-finite UVs; left out of the atlas"
+            log.warning("chart %d: degenerate UVs, left out of the atlas", ch.id)
     corner_uv = np.zeros((m, 3, 2))
     atlas = None
     if done:
@@ -370,19 +385,17 @@ def run_pipeline(
         corner_uv = atlas_corner_uv(
             m,
             [ch.faces for ch in charts],
-            [
-                ch.cut.F if ch.param is not None else np.zeros((len(ch.faces), 3), int)
-                for ch in charts
-            ],
-            [ch.uv if ch.param is not None else np.zeros((1, 2)) for ch in charts],
+            [ch.cut.F if ch.uv is not None else np.zeros((len(ch.faces), 3), int) for ch in charts],
+            [ch.uv if ch.uv is not None else np.zeros((1, 2)) for ch in charts],
         )
     t_pack = time.perf_counter() - t
 
     n_charts = len(charts)
-    n_param = len(done)
+    n_param = sum(ch.param is not None for ch in charts)
     summary = {
         "charts_total": n_charts,
         "charts_parameterized": n_param,
+        "charts_in_atlas": len(done),
         "charts_bijective": int(sum(bool(ch.report.get("bijective")) for ch in charts)),
         "charts_fallback": int(sum(bool(ch.report.get("fallback_used")) for ch in charts)),
         "charts_cut": int(sum(ch.report["cut_length"] > 0 for ch in charts)),

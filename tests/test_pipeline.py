@@ -203,3 +203,22 @@ def test_run_with_pictures(can_mesh, tmp_path):
     # Rendering may be impossible here (no OpenGL): then it is skipped, never fatal.
     for name in res.report["pictures"]:
         assert (tmp_path / name).stat().st_size > 0
+
+
+def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
+    import igl_heatseg.param as param_mod
+
+    real = param_mod.parameterize_chart
+
+    def collapse_side(V, F, *args, **kwargs):
+        p = real(V, F, *args, **kwargs)
+        if len(F) == 2 * NU * NV:  # the side: pretend its map collapsed
+            p.UV = np.zeros_like(p.UV)
+        return p
+
+    monkeypatch.setattr(param_mod, "parameterize_chart", collapse_side)
+    res = run_pipeline(can_mesh, None)
+    side = side_chart(res)
+    assert "atlas_error" in side.report
+    assert res.report["parameterization"]["charts_in_atlas"] == 2
+    assert np.all(res.corner_uv[side.faces] == 0)

@@ -135,7 +135,8 @@ class CutResult:
     method : str
         ``"none"`` (already a disk), ``"unpinch"`` (only pinched vertices split),
         ``"annulus"``, ``"boundary-tree"`` (genus 0, several loops), ``"sphere-path"``,
-        ``"tree-cotree"`` (genus > 0), ``"paths"`` (user-given paths) or ``"edges"``.
+        ``"tree-cotree"`` or ``"igl-cut-to-disk"`` (genus > 0), ``"paths"`` (user-given
+        paths) or ``"edges"``.
     paths : list of (k_i,) int64
         For path-based cuts, the vertex sequences (input ids) of each path.
     """
@@ -542,7 +543,8 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
       between its two loops: a generatrix on a cylinder);
     * closed genus 0: the shortest path between two far-apart vertices;
     * genus ``g > 0``: a greedy tree-cotree system of ``2g`` short loops (plus paths to the
-      boundary loops, if any);
+      boundary loops, if any), or ``igl.cut_to_disk``'s cut graph when that is shorter
+      (``method == "igl-cut-to-disk"``);
     * pinched vertices (the chart touches itself at one vertex) are split in every case.
 
     The result is verified with :func:`chart_topology`.
@@ -607,6 +609,20 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
     for p in paths:
         cut[_edge_ids(topo_u, Vu.shape[0], _path_edges(p))] = True
     res = _finish(Vu, Fu, topo_u, cut, before, method, base_map=umap, paths=paths)
+    if g > 0:
+        # libigl's triangle-deletion cut graph (Gu et al. 2002) is sometimes shorter on
+        # thin, many-handled parts: keep whichever valid disk cut is shorter.
+        alt = [np.asarray(c, dtype=np.int64) for c in igl.cut_to_disk(Fu) if len(c) > 1]
+        cut2 = np.zeros(len(topo_u.E), dtype=bool)
+        for p in alt:
+            ids = _edge_ids(topo_u, Vu.shape[0], _path_edges(p))
+            cut2[ids[ids >= 0]] = True
+        cut2 &= topo_u.interior
+        length2 = _lengths(Vu, topo_u.E[cut2]).sum()
+        if length2 < res.cut_length * (1 - 1e-12):
+            res2 = _finish(Vu, Fu, topo_u, cut2, before, "igl-cut-to-disk", umap, alt)
+            if res2.topology_after.is_disk:
+                res = res2
     if not res.topology_after.is_disk:
         raise CutError(
             f"{name}: internal error: {method} cut of a chart with genus {g} and {b} boundary "

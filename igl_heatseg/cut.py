@@ -12,8 +12,10 @@ This module
   homotopy and homology generators", extended to boundaries by contracting all boundary
   vertices into the root).  On an annulus it is the shortest edge path between the two
   boundary loops (a generatrix on a cylinder); on a plate with ``h`` holes, ``h`` short paths
-  joining the loops; on a torus, two shortest non-contractible loops through one vertex.  A
-  closed genus-0 chart is opened along the shortest path between two far-apart vertices.
+  joining the loops; on a torus, two short non-contractible loops through one vertex (the
+  best of a few root vertices; ``igl.cut_to_disk``'s cut graph is used instead when it is
+  shorter).  A closed genus-0 chart is opened along the shortest path between two far-apart
+  vertices.
 
 Opening a mesh along cut edges (:func:`cut_mesh_along_edges`) duplicates vertices: the corners
 around a vertex are grouped into *wedges*, joined across every interior edge that is not cut;

@@ -19,8 +19,11 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
 4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
    is turned over (``u -> -u``), not counted as flipped.
 5. If not bijective: a Tutte map (uniform weights, boundary on a circle by arc length) is
-   bijective by construction (Floyd/Tutte); it is improved by SLIM (symmetric Dirichlet, free
-   boundary) and the improvement is kept only if the certificate still says bijective.
+   bijective by construction (Floyd/Tutte); it is improved by SLIM (symmetric Dirichlet), one
+   iteration at a time with the certificate after each, keeping the last bijective iterate.
+   Free boundary first; if its boundary starts to overlap before the last iteration, SLIM
+   with the boundary held on the circle is tried too, and the lower energy wins
+   (``"tutte+slim"`` / ``"tutte+slim-fixed"``).
 
 Distortion measures (:func:`distortion`), all after a global scale normalisation that makes the
 total image area equal the total 3D area; per-triangle Jacobian ``J`` (3D triangle in its own
@@ -94,12 +97,16 @@ MAX_NULL_DIM: int = 6
 #: SLIM iterations of the Tutte fallback's improvement.
 SLIM_ITERATIONS: int = 30
 
+#: Soft-constraint weight holding the boundary in the fixed-boundary SLIM variant.
+SLIM_SOFT_P: float = 1e5
+
 #: Methods known to :func:`map_chart`.
 METHODS: tuple[str, ...] = (
     "hessian-hlle",
     "hessian-curved",
     "tutte",
     "tutte+slim",
+    "tutte+slim-fixed",
     "harmonic",
     "lscm",
     "arap",
@@ -117,7 +124,7 @@ class ChartParam:
         Counter-clockwise image orientation when the map is bijective (mirror undone).
     method : str
         What produced ``UV``: ``"hessian-hlle"``, ``"hessian-curved"``, ``"tutte"``,
-        ``"tutte+slim"``, ``"harmonic"``, ``"lscm"``, ``"arap"``.
+        ``"tutte+slim"``, ``"tutte+slim-fixed"``, ``"harmonic"``, ``"lscm"``, ``"arap"``.
     bijective : bool
         Certificate verdict for ``UV``.
     flips, overlaps : int
@@ -395,21 +402,75 @@ def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np
     return UV
 
 
-def _slim(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int,
-          energy=None) -> np.ndarray:
-    """SLIM (libigl) from a flip-free start, free boundary."""
+def _slim_data(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, b=None, bc=None, energy=None):
     if energy is None:
         energy = igl.MappingEnergyType.SYMMETRIC_DIRICHLET
-    data = igl.slim_precompute(
+    fixed = b is not None and len(b) > 0
+    return igl.slim_precompute(
         np.asfortranarray(V),
         np.asfortranarray(F.astype(np.int32)),
         np.asfortranarray(UV0),
         energy,
-        np.zeros(0, dtype=np.int32),
-        np.zeros((0, 2), order="F"),
-        0.0,
+        np.asarray(b if fixed else np.zeros(0), dtype=np.int32),
+        np.asfortranarray(bc if fixed else np.zeros((0, 2))),
+        SLIM_SOFT_P if fixed else 0.0,
     )
+
+
+def _slim(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int,
+          energy=None) -> np.ndarray:
+    """SLIM (libigl) from a flip-free start, free boundary, no certificate."""
+    data = _slim_data(V, F, UV0, energy=energy)
     return np.ascontiguousarray(igl.slim_solve(data, iterations)[:, :2])
+
+
+def _slim_guarded(
+    V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int, name: str,
+    bnd: np.ndarray | None = None,
+) -> tuple[np.ndarray, Certificate | None, int]:
+    """SLIM one iteration at a time from a bijective start; keep the last bijective iterate.
+
+    SLIM's line search prevents flips but not boundary overlaps (free boundary).  All
+    iterations are run first; if the result fails the certificate, SLIM is rerun one iteration
+    at a time with the certificate after each and stopped at the last bijective map.  With ``bnd`` the
+    boundary is held (soft constraint, :data:`SLIM_SOFT_P`) at its start positions.
+
+    Returns
+    -------
+    UV : (n, 2) float64
+        Last bijective iterate (``UV0`` when none was).
+    cert : Certificate or None
+        Its certificate (``None`` when no iteration was accepted).
+    accepted : int
+        Number of accepted iterations.
+    """
+    bc = UV0[bnd] if bnd is not None else None
+    try:
+        # Optimistic: all iterations at once, one certificate.
+        data = _slim_data(V, F, UV0, bnd, bc)
+        UV = np.ascontiguousarray(igl.slim_solve(data, iterations)[:, :2])
+        if np.all(np.isfinite(UV)):
+            UV, cert = _finish(UV, V, F, name)
+            if cert.bijective:
+                return UV, cert, iterations
+        data = _slim_data(V, F, UV0, bnd, bc)
+    except RuntimeError as exc:  # pragma: no cover - libigl failure
+        log.warning("%s: SLIM failed: %s", name, exc)
+        return UV0, None, 0
+    best, best_cert, accepted = UV0, None, 0
+    for _ in range(iterations):
+        try:
+            UV = np.ascontiguousarray(igl.slim_solve(data, 1)[:, :2])
+        except RuntimeError as exc:  # pragma: no cover - libigl failure
+            log.warning("%s: SLIM iteration failed: %s", name, exc)
+            break
+        if not np.all(np.isfinite(UV)):
+            break
+        UV, cert = _finish(UV, V, F, name)
+        if not cert.bijective:
+            break
+        best, best_cert, accepted = UV, cert, accepted + 1
+    return best, best_cert, accepted
 
 
 def _harmonic(V, F, bnd):
@@ -519,6 +580,10 @@ def _run(method: str, Vn, Fc, bnd, name, energy_kwargs) -> tuple[np.ndarray, np.
         UVc = tutte_map(Vn, Fc, bnd)
     elif method == "tutte+slim":
         UVc = _slim(Vn, Fc, tutte_map(Vn, Fc, bnd), SLIM_ITERATIONS)
+    elif method == "tutte+slim-fixed":
+        UVt = tutte_map(Vn, Fc, bnd)
+        data = _slim_data(Vn, Fc, UVt, bnd, UVt[bnd])
+        UVc = np.ascontiguousarray(igl.slim_solve(data, SLIM_ITERATIONS)[:, :2])
     elif method == "harmonic":
         UVc = _harmonic(Vn, Fc, bnd)
     elif method == "lscm":
@@ -613,8 +678,9 @@ def parameterize_chart(
         curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`).
     fallback : {"tutte+slim", "tutte", "none"}
         What to do when the Hessian map is not bijective: a Tutte map (bijective by
-        construction), optionally improved by SLIM and the improvement kept only if still
-        bijective; or nothing (return the non-bijective Hessian map, flagged).
+        construction), optionally improved by SLIM keeping only certified-bijective iterates
+        (free boundary, then boundary held on the circle); or nothing (return the
+        non-bijective Hessian map, flagged).
     slim_iterations : int
         SLIM iterations for ``"tutte+slim"``.
     name : str
@@ -626,7 +692,8 @@ def parameterize_chart(
     -------
     ChartParam
         ``method`` is ``"hessian-hlle"``/``"hessian-curved"`` when the Hessian map is bijective,
-        else ``"tutte"`` or ``"tutte+slim"`` (``fallback_used=True``); ``attempts`` lists every
+        else ``"tutte"``, ``"tutte+slim"`` or ``"tutte+slim-fixed"`` (``fallback_used=True``);
+        ``attempts`` lists every
         map tried with its certificate.  ``UV`` is in the units of ``V`` (Hessian maps are
         isometric-as-possible; the Tutte fallback is scaled to the chart's area).
 
@@ -688,19 +755,25 @@ def parameterize_chart(
         attempts.append({"method": "tutte", **cert_t.summary(), "seconds": time.perf_counter() - t})
         UVc, cert, method = UVt, cert_t, "tutte"
         if fallback == "tutte+slim" and cert_t.bijective and slim_iterations > 0:
+            # Free boundary first; if the boundary starts to overlap before the last iteration,
+            # also try with the boundary held on the circle, and keep the lower energy.
             t = time.perf_counter()
-            try:
-                UVs = _slim(Vn, Fc, UVt, slim_iterations)
-                good = bool(np.all(np.isfinite(UVs)))
-            except RuntimeError as exc:  # pragma: no cover - libigl failure
-                log.warning("%s: SLIM failed: %s", name, exc)
-                good = False
-            if good:
-                UVs, cert_s = _finish(UVs, Vn, Fc, name)
-                attempts.append({"method": "tutte+slim", **cert_s.summary(),
+            UVs, cert_s, acc = _slim_guarded(Vn, Fc, UVt, slim_iterations, name)
+            attempts.append({"method": "tutte+slim", "accepted_iterations": acc,
+                             **(cert_s.summary() if cert_s else cert_t.summary()),
+                             "seconds": time.perf_counter() - t})
+            options = [(UVs, cert_s, "tutte+slim")] if acc > 0 else []
+            if acc < slim_iterations:
+                t = time.perf_counter()
+                UVf, cert_f, acc_f = _slim_guarded(Vn, Fc, UVt, slim_iterations, name, bnd)
+                attempts.append({"method": "tutte+slim-fixed", "accepted_iterations": acc_f,
+                                 **(cert_f.summary() if cert_f else cert_t.summary()),
                                  "seconds": time.perf_counter() - t})
-                if cert_s.bijective:
-                    UVc, cert, method = UVs, cert_s, "tutte+slim"
+                if acc_f > 0:
+                    options.append((UVf, cert_f, "tutte+slim-fixed"))
+            if options:
+                sd = [distortion(Vn, Fc, o[0])["sym_dirichlet"] for o in options]
+                UVc, cert, method = options[int(np.argmin(sd))]
         if not cert.bijective:
             log.warning("%s: fallback map is not bijective either (%s)", name, cert.summary())
         if method == "tutte":  # arbitrary scale: match the chart's area

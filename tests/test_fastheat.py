@@ -71,6 +71,15 @@ def test_noisy_sphere_with_negative_weights_matches_exact():
     assert solver.stats["uncertified_vertices"] > 0  # the fallback was exercised
 
 
+def test_exact_fallback_when_refinement_is_off():
+    V, F = sphere(4)
+    V = _perturb(V, F, 0.3, 8)
+    k, group = _noisy_groups(V, F, 0.2, 4)
+    solver, _, _ = _compare(V, F, group, refine_halo=0, **LOCAL)
+    assert solver.stats["fallback_groups"] > 0
+    assert solver.stats["exact_vertices"] + solver.stats["exact_faces"] > 0
+
+
 def test_lower_bounds_on_delaunay_sphere():
     # All cotangent weights are non-negative: certified vertex_max is a lower bound of the
     # exact maximum (maximum principle), and labels agree.

@@ -1,0 +1,176 @@
+"""Tests for igl_heatseg.robust: denoising, curvature classes, primitive fits, robust mode."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import igl
+import numpy as np
+import pytest
+
+from igl_heatseg.checks import validate_mesh
+from igl_heatseg.errors import MeshError
+from igl_heatseg.evaluate import coverage, purity
+from igl_heatseg.robust import (
+    RobustSegmentation,
+    bilateral_normals,
+    curvature_classes,
+    denoise_vertices,
+    fit_cylinder,
+    fit_plane,
+    fit_sphere,
+    primitive_type,
+    segment_robust,
+)
+from igl_heatseg.segment import Segmentation
+from igl_heatseg.topology import face_components
+
+FIT_TOL = 1e-9
+
+CUBE_V = np.array([[x, y, z] for x in (0.0, 1) for y in (0.0, 1) for z in (0.0, 1)])
+CUBE_F = np.array(
+    [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+     [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+)  # fmt: skip
+
+
+def fine_box(levels=4, scale=(2.0, 1.0, 0.5)):
+    V, F = igl.upsample(CUBE_V, CUBE_F, levels)
+    return V * np.asarray(scale), F, np.repeat(np.arange(6), 2 * 4**levels)
+
+
+def grid(n=30):
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], 1)
+    i = np.arange(n * n).reshape(n, n)[:-1, :-1].ravel()
+    F = np.concatenate([np.stack([i, i + 1, i + n + 1], 1), np.stack([i, i + n + 1, i + n], 1)])
+    return V, F
+
+
+def normal_noise(V, F, sigma, seed=0):
+    N = igl.per_vertex_normals(V, F)
+    return V + np.random.default_rng(seed).normal(0, sigma, len(V))[:, None] * N
+
+
+# ---------------------------------------------------------------- denoising
+def test_bilateral_normals_and_vertex_update_denoise_a_plane():
+    V, F = grid()
+    h = 1 / 29
+    W = normal_noise(V, F, 0.1 * h)
+    raw = np.cross(W[F[:, 1]] - W[F[:, 0]], W[F[:, 2]] - W[F[:, 0]])
+    raw /= np.linalg.norm(raw, axis=1, keepdims=True)
+    N = bilateral_normals(W, F)
+    assert np.allclose(np.linalg.norm(N, axis=1), 1.0)
+    err_raw = np.degrees(np.arccos(np.clip(raw[:, 2], -1, 1))).mean()
+    err = np.degrees(np.arccos(np.clip(N[:, 2], -1, 1))).mean()
+    assert err < 0.3 * err_raw
+    D = denoise_vertices(W, F, N)
+    assert np.sqrt((D[:, 2] ** 2).mean()) < 0.5 * np.sqrt((W[:, 2] ** 2).mean())
+
+
+def test_bilateral_filter_keeps_a_cube_crease():
+    V, F, side = fine_box(3)
+    N = bilateral_normals(V, F)
+    raw = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    raw /= np.linalg.norm(raw, axis=1, keepdims=True)
+    # exact planes: nothing to smooth; the range weight keeps 90-degree creases (< 0.5 deg)
+    assert np.degrees(np.arccos(np.clip((N * raw).sum(1), -1, 1))).max() < 0.5
+
+
+# ---------------------------------------------------------------- curvature classes
+def test_curvature_classes_plane_sphere_cylinder():
+    V, F = grid()
+    cls, _ = curvature_classes(V, F, 1 / 29)
+    assert np.all(cls == 0)
+    S, G = igl.loop(*igl.icosahedron(), 3)
+    S /= np.linalg.norm(S, axis=1, keepdims=True)
+    h = igl.avg_edge_length(S, G)
+    cls, _ = curvature_classes(S, G, h)
+    assert np.mean(cls == 2) > 0.95
+    # open cylinder of radius 1 along z
+    t, z = np.meshgrid(np.linspace(0, 2 * np.pi, 48, endpoint=False), np.linspace(0, 2, 16))
+    C = np.stack([np.cos(t).ravel(), np.sin(t).ravel(), z.ravel()], 1)
+    i = np.arange(48 * 16).reshape(16, 48)
+    a, b = i[:-1].ravel(), np.roll(i, -1, axis=1)[:-1].ravel()
+    F = np.concatenate([np.stack([a, b, b + 48], 1), np.stack([a, b + 48, a + 48], 1)])
+    cls, axis = curvature_classes(C, F, igl.avg_edge_length(C, F))
+    inside = (C[:, 2] > 0.5) & (C[:, 2] < 1.5)
+    assert np.all(cls[inside] == 1)
+    assert np.all(np.abs(axis[inside, 2]) > 0.99)
+
+
+# ---------------------------------------------------------------- primitive fits
+def test_fits_recover_exact_primitives():
+    rng = np.random.default_rng(1)
+    P = rng.uniform(-1, 1, (200, 3))
+    P[:, 2] = 0.3 * P[:, 0] - 0.2 * P[:, 1] + 1.0
+    rms, c, n = fit_plane(P)
+    assert rms < FIT_TOL and abs(n @ np.array([0.3, -0.2, -1.0])) == pytest.approx(
+        np.linalg.norm([0.3, -0.2, -1.0])
+    )
+    d = rng.normal(size=(300, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    rms, c, r = fit_sphere(np.array([1.0, 2, 3]) + 2.5 * d)
+    assert rms < FIT_TOL and np.allclose(c, [1, 2, 3]) and r == pytest.approx(2.5)
+    t, z = rng.uniform(0, 2 * np.pi, 300), rng.uniform(0, 4, 300)
+    Nc = np.stack([np.cos(t), np.sin(t), 0 * t], 1)
+    rms, p, a, r = fit_cylinder(np.array([0.5, -1, 0]) + 1.7 * Nc + np.outer(z, [0, 0, 1]), Nc)
+    assert rms < FIT_TOL and r == pytest.approx(1.7) and abs(a[2]) == pytest.approx(1.0)
+    assert np.allclose(p[:2], [0.5, -1])
+
+
+def test_primitive_type_prefers_the_simplest_good_fit():
+    rng = np.random.default_rng(2)
+    h, diag = 0.05, 5.0
+    P = np.c_[rng.uniform(0, 1, (100, 2)), np.zeros(100)]
+    assert primitive_type(P, np.tile([0, 0, 1.0], (100, 1)), h, diag)[0] == "Plane"
+    t, z = rng.uniform(0, np.pi, 200), rng.uniform(0, 1, 200)
+    Nc = np.stack([np.cos(t), np.sin(t), 0 * t], 1)
+    assert primitive_type(Nc + np.outer(z, [0, 0, 1]), Nc, h, diag)[0] == "Cylinder"
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    assert primitive_type(d, d, h, diag)[0] == "Sphere"
+    assert primitive_type(P[:3], P[:3], h, diag)[0] == "Other"
+
+
+# ---------------------------------------------------------------- robust mode
+def test_robust_mode_on_a_box_clean_and_noisy():
+    V, F, side = fine_box()
+    for sigma in (0.0, 0.1):
+        h = igl.avg_edge_length(V, F)
+        W = V if sigma == 0 else normal_noise(V, F, sigma * h, seed=3)
+        seg = segment_robust(validate_mesh(W, F))
+        assert isinstance(seg, RobustSegmentation) and isinstance(seg, Segmentation)
+        assert purity(seg.labels, side) > 0.97 and coverage(seg.labels, side) > 0.97
+        assert seg.num_segments == 6
+        assert seg.primitive_types[:4] == ["Plane"] * 4
+        assert np.all(np.diff(seg.segment_areas) <= 1e-12)
+        for s in range(seg.num_segments):
+            assert face_components(F[seg.labels == s])[0] == 1
+        assert seg.vertex_labels.shape == (len(W),) and seg.vertex_labels.min() >= 0
+
+
+def test_robust_mode_bad_parameters():
+    V, F, _ = fine_box(1)
+    mesh = validate_mesh(V, F)
+    with pytest.raises(MeshError, match="theta"):
+        segment_robust(mesh, theta=0.0)
+    with pytest.raises(MeshError, match="eps"):
+        segment_robust(mesh, eps=1.5)
+
+
+@pytest.mark.slow
+def test_robust_mode_separates_fillets_on_a_generated_part():
+    pytest.importorskip("gmsh", reason="gmsh needed for the generated part")
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+    from make_parts import add_normal_noise, make_part
+
+    p = make_part(5, "rounded_box", target_faces=15000)  # 26 B-Rep faces
+    for noise in (0.0, 0.1):
+        V = p.V if noise == 0 else add_normal_noise(p.V, p.F, noise, 7)
+        seg = segment_robust(validate_mesh(V, p.F))
+        area = igl.doublearea(p.V, p.F)
+        assert purity(seg.labels, p.labels, area) >= 0.9
+        assert coverage(seg.labels, p.labels, area) >= 0.85
+        assert seg.num_segments >= 18  # fillets are segments of their own (paper mode: 1)

@@ -12,10 +12,10 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
 3. Gram (affine) correction.  The eigenvectors ``Y`` are an affine image of an isometric
    layout, so ``l_e^2 ~ d_e^T G d_e`` for every edge ``e`` (``d_e`` the edge in eigen
    coordinates, ``G`` symmetric).  ``G`` is fitted by least squares with relative weights
-   (equations divided by ``l_e^2``) and the map is ``Y G^(1/2)``.  When the numerical null space
-   has dimension ``d > 2`` (relative eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny charts) the same
-   fit is done for a ``d x d`` ``G`` over all ``d`` null vectors and its best rank-2 part is used,
-   which reduces to the 2 x 2 correction when ``d = 2``.
+   (equations divided by ``l_e^2``) and the map is ``Y G^(1/2)``.  When the numerical null
+   space has dimension ``d > 2`` (relative eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny
+   charts) the same fit is done for a ``d x d`` ``G`` over all ``d`` null vectors and its best
+   rank-2 part is used, which reduces to the 2 x 2 correction when ``d = 2``.
 4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
    is turned over (``u -> -u``), not counted as flipped.
 5. If not bijective: a Tutte map (uniform weights, boundary on a circle by arc length) is
@@ -198,7 +198,9 @@ def _prepare_chart(V: ArrayLike, F: ArrayLike, name: str):
             f"{name}: not a topological disk ({ncomp} face component(s), {len(loops)} boundary "
             f"loop(s), Euler characteristic {chi}; a disk has 1, 1, 1): cut it to a disk first"
         )
-    dblA = np.linalg.norm(np.cross(Vc[Fc[:, 1]] - Vc[Fc[:, 0]], Vc[Fc[:, 2]] - Vc[Fc[:, 0]]), axis=1)
+    dblA = np.linalg.norm(
+        np.cross(Vc[Fc[:, 1]] - Vc[Fc[:, 0]], Vc[Fc[:, 2]] - Vc[Fc[:, 0]]), axis=1
+    )
     area = 0.5 * dblA.sum()
     if not area > 0:
         raise MeshError(f"{name}: chart has zero area")
@@ -432,8 +434,8 @@ def _slim_guarded(
 
     SLIM's line search prevents flips but not boundary overlaps (free boundary).  All
     iterations are run first; if the result fails the certificate, SLIM is rerun one iteration
-    at a time with the certificate after each and stopped at the last bijective map.  With ``bnd`` the
-    boundary is held (soft constraint, :data:`SLIM_SOFT_P`) at its start positions.
+    at a time with the certificate after each and stopped at the last bijective map.  With
+    ``bnd`` the boundary is held (soft constraint, :data:`SLIM_SOFT_P`) at its start positions.
 
     Returns
     -------

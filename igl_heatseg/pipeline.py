@@ -126,16 +126,9 @@ def parse_cut_path(text: str) -> tuple[int, int]:
     return v0, v1
 
 
-def _assign_paths(
-    mesh: CleanMesh, charts: list[Chart], cut_paths: Sequence[tuple[int, int]]
-) -> dict[int, list[tuple[int, int]]]:
-    """Map input-vertex pairs to (chart id -> list of clean-vertex pairs)."""
+def _check_cut_paths(mesh: CleanMesh, cut_paths: Sequence[tuple[int, int]]) -> None:
+    """Input-vertex ids of cut paths: pairs of integers, in range, used by a face, distinct."""
     n_in = mesh.n_input_vertices
-    out: dict[int, list[tuple[int, int]]] = {}
-    if not cut_paths:
-        return out
-    vert_charts: dict[int, set[int]] = {}
-    wanted = set()
     for pair in cut_paths:
         if len(pair) != 2:
             raise MeshError(f"{mesh.name}: a cut path needs two vertex ids, got {pair!r}")
@@ -148,7 +141,21 @@ def _assign_paths(
                 )
             if mesh.vertex_map[int(v)] < 0:
                 raise MeshError(f"{mesh.name}: cut-path vertex {v} is not used by any face")
-            wanted.add(int(mesh.vertex_map[int(v)]))
+        v0, v1 = pair
+        if mesh.vertex_map[int(v0)] == mesh.vertex_map[int(v1)]:
+            raise MeshError(f"{mesh.name}: cut path {v0}:{v1} starts and ends at one vertex")
+
+
+def _assign_paths(
+    mesh: CleanMesh, charts: list[Chart], cut_paths: Sequence[tuple[int, int]]
+) -> dict[int, list[tuple[int, int]]]:
+    """Map input-vertex pairs to (chart id -> list of clean-vertex pairs)."""
+    out: dict[int, list[tuple[int, int]]] = {}
+    if not cut_paths:
+        return out
+    _check_cut_paths(mesh, cut_paths)
+    vert_charts: dict[int, set[int]] = {}
+    wanted = {int(mesh.vertex_map[int(v)]) for pair in cut_paths for v in pair}
     wanted_arr = np.array(sorted(wanted), dtype=np.int64)
     for ch in charts:
         used = np.unique(mesh.F[ch.faces])
@@ -156,8 +163,6 @@ def _assign_paths(
             vert_charts.setdefault(v, set()).add(ch.id)
     for v0, v1 in cut_paths:
         c0, c1 = int(mesh.vertex_map[int(v0)]), int(mesh.vertex_map[int(v1)])
-        if c0 == c1:
-            raise MeshError(f"{mesh.name}: cut path {v0}:{v1} starts and ends at one vertex")
         common = sorted(vert_charts.get(c0, set()) & vert_charts.get(c1, set()))
         if not common:
             raise MeshError(
@@ -250,6 +255,7 @@ def run_pipeline(
     if energy not in ("hlle", "curved"):
         raise MeshError(f"`energy` must be 'hlle' or 'curved', got {energy!r}")
     t0 = time.perf_counter() if t_start is None else t_start
+    _check_cut_paths(mesh, cut_paths)  # before the (long) segmentation
     progress = progress or (lambda stage, fraction=1.0: None)
     seg = segment_mesh(mesh, theta, eps, progress=progress, keep_solvers=False)
     V, F = mesh.V, mesh.F

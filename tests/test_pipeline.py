@@ -146,6 +146,10 @@ def test_bad_cut_paths_raise(can_mesh):
     centre_bottom = (NV + 1) * NU + (NR - 1) * NU
     with pytest.raises(MeshError, match="no chart contains both"):
         run_pipeline(can_mesh, None, cut_paths=[(centre_bottom, centre_bottom + NU * (NR - 1) + 1)])
+    with pytest.raises(MeshError, match="starts and ends at one vertex"):
+        run_pipeline(can_mesh, None, cut_paths=[(5, 5)])
+    with pytest.raises(MeshError, match="two vertex ids"):
+        run_pipeline(can_mesh, None, cut_paths=[(5, 6, 7)])
     with pytest.raises(MeshError, match="cut"):
         run_pipeline(can_mesh, None, cut="sometimes")
 

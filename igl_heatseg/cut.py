@@ -277,6 +277,39 @@ def _path_edges(path: np.ndarray) -> np.ndarray:
     return np.stack([path[:-1], path[1:]], axis=1)
 
 
+def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
+    """Edge topology of ``Fn = _open(F, topo, cut)`` from that of ``F``, without a sort.
+
+    An interior edge of ``F`` whose two faces reach it through different wedge pairs in
+    ``Fn`` (it was opened) becomes two boundary edges: the first face keeps the edge id, the
+    second face's copy gets a new id after the old ones.  Every other edge carries over.  Same
+    edges as :func:`igl_heatseg.topology.edge_topology` of ``Fn`` up to edge numbering (``E`` is
+    not sorted by row; :func:`_edge_ids` does not need it).
+    """
+    m = Fn.shape[0]
+    ne = len(topo.E)
+    D = np.sort(corner_edges(Fn), axis=1)
+    ncorner = len(topo.EMAP)
+    first = np.empty(ne, dtype=np.int64)
+    first[topo.EMAP[::-1]] = np.arange(ncorner)[::-1]
+    last = np.empty(ne, dtype=np.int64)
+    last[topo.EMAP] = np.arange(ncorner)
+    inner = topo.edge_face_count == 2
+    split = inner & (D[first] != D[last]).any(axis=1)
+    s_ids = np.flatnonzero(split)
+    new_ids = ne + np.arange(len(s_ids))
+    EMAP = topo.EMAP.copy()
+    EMAP[last[s_ids]] = new_ids
+    E = np.concatenate([D[first], D[last[s_ids]]])
+    counts = np.concatenate([topo.edge_face_count, np.ones(len(s_ids), dtype=np.int64)])
+    counts[s_ids] = 1
+    EF = np.concatenate([topo.EF, np.full((len(s_ids), 2), -1, dtype=np.int64)])
+    EF[s_ids, 1] = -1
+    EF[new_ids, 0] = last[s_ids] % m  # corner-edge c = j*m + f
+    EF[s_ids, 0] = first[s_ids] % m
+    return EdgeTopology(E=E, EMAP=EMAP, edge_face_count=counts, EF=EF)
+
+
 # --------------------------------------------------------------------------------------------
 # topology
 
@@ -378,7 +411,7 @@ def _finish(
         vmap = base_map[vmap]
         E = np.sort(base_map[E], axis=1)
         paths = [base_map[p] for p in (paths or [])]
-    after = _topology(Fn, edge_topology(Fn))
+    after = _topology(Fn, _split_topology(topo, Fn))
     return CutResult(
         V=Vn,
         F=Fn,

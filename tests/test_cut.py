@@ -566,6 +566,19 @@ def test_any_random_chart_becomes_a_manifold_disk(seed, drop, surface):
     np.testing.assert_allclose(res.V, V[res.vertex_map])
     # corners keep their input vertex: same faces up to the duplication
     np.testing.assert_array_equal(res.vertex_map[res.F], Fc)
+    # the sort-free topology update agrees with edge_topology, corner by corner
+    from igl_heatseg.cut import _open, _split_topology
+    from igl_heatseg.topology import edge_topology
+
+    topo = edge_topology(Fc)
+    cut = rng.random(len(topo.E)) < 0.2
+    Fn, _ = _open(Fc, topo, cut)
+    fast, ref = _split_topology(topo, Fn), edge_topology(Fn)
+    np.testing.assert_array_equal(fast.E[fast.EMAP], ref.E[ref.EMAP])
+    np.testing.assert_array_equal(fast.edge_face_count[fast.EMAP], ref.edge_face_count[ref.EMAP])
+    np.testing.assert_array_equal(
+        np.sort(fast.EF[fast.EMAP], axis=1), np.sort(ref.EF[ref.EMAP], axis=1)
+    )
 
 
 def test_annulus_cut_is_the_shortest_loop_to_loop_path():

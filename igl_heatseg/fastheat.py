@@ -422,7 +422,7 @@ class FastHeatSolver:
         owned = np.argsort(owner, kind="stable")
         bounds = np.searchsorted(owner[owned], np.arange(npatch + 1) - 0.5)
         ownerless = owned[: bounds[0]]
-        tsub = [0.0, 0.0, 0.0]
+        tsub = [0.0] * 5
         for c in range(npatch):
             gids = owned[bounds[c] : bounds[c + 1]]  # sorted by group id (stable sort)
             if len(gids) == 0:
@@ -447,6 +447,8 @@ class FastHeatSolver:
             wsum[D] += W.sum(axis=1)
             tv, ti, tx = _topk_rows(W, K)  # patch-local top-K per domain vertex
             _merge_topk(vval, vid, vexc, D, tv, gids[ti], tx)
+            t5 = time.perf_counter()
+            tsub[3] += t5 - t4
             # Faces with a free corner in D.  Candidates: the groups in the local top-K of
             # their free corners and the groups of their seed corners; every other group of
             # this patch is below the corner mean of the local (K+1)-th values.
@@ -477,10 +479,12 @@ class FastHeatSolver:
             fv, fi, fx = _topk_rows(val, K)
             _merge_topk(fval, fid, fexc, faces, fv, gids[np.take_along_axis(cz, fi, 1)],
                         np.maximum(fx, rest))
+            tsub[4] += time.perf_counter() - t5
             if progress is not None:
                 progress(0.9 * (c + 1) / npatch)
         st["patch_solves_s"] = time.perf_counter() - t
-        st["patch_slice_s"], st["patch_factor_s"], st["patch_solve_s"] = tsub
+        for name, val in zip(("slice", "factor", "solve", "vertices", "faces"), tsub):
+            st[f"patch_{name}_s"] = val
         if len(ownerless):
             log.debug("%d groups touch no free vertex", len(ownerless))
 

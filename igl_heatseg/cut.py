@@ -277,6 +277,16 @@ def _path_edges(path: np.ndarray) -> np.ndarray:
     return np.stack([path[:-1], path[1:]], axis=1)
 
 
+def _path_mask(topo: EdgeTopology, n: int, paths: list) -> np.ndarray:
+    """(ne,) bool: edges used by the vertex paths (steps that are not edges are ignored)."""
+    cut = np.zeros(len(topo.E), dtype=bool)
+    steps = [_path_edges(np.asarray(p, dtype=np.int64)) for p in paths if len(p) > 1]
+    if steps:
+        ids = _edge_ids(topo, n, np.concatenate(steps))
+        cut[ids[ids >= 0]] = True
+    return cut
+
+
 def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
     """Edge topology of ``Fn = _open(F, topo, cut)`` from that of ``F``, without a sort.
 
@@ -314,11 +324,16 @@ def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
 # topology
 
 
-def _topology(F: np.ndarray, topo: EdgeTopology) -> ChartTopology:
-    ncomp, fcomp = face_components(F, topo)
+def _topology(
+    F: np.ndarray, topo: EdgeTopology, unpinched: tuple[np.ndarray, np.ndarray] | None = None
+) -> ChartTopology:
+    """Topology of ``F``; ``unpinched`` = ``_open(F, topo, no cuts)`` if already known."""
+    ncomp, _ = face_components(F, topo)
     nv = len(np.unique(F))
     chi = int(nv - len(topo.E) + F.shape[0])
-    Fu, vmap = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
+    if unpinched is None:
+        unpinched = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
+    Fu, vmap = unpinched
     pinched = int(len(vmap) - nv)
     # Boundary loops after unpinching: components of the boundary-edge graph.  Edges keep
     # their ids (unpinching does not split edges), so map boundary edges through Fu.
@@ -411,7 +426,8 @@ def _finish(
         vmap = base_map[vmap]
         E = np.sort(base_map[E], axis=1)
         paths = [base_map[p] for p in (paths or [])]
-    after = _topology(Fn, _split_topology(topo, Fn))
+    # Fn is made of wedges: already unpinched, all of its vertices used.
+    after = _topology(Fn, _split_topology(topo, Fn), (Fn, np.arange(len(vmap))))
     return CutResult(
         V=Vn,
         F=Fn,
@@ -618,18 +634,18 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
     (2, True, 1.0)
     """
     V, F, topo = _check_chart(V, F, name)
-    before = _topology(F, topo)
+    none = np.zeros(len(topo.E), dtype=bool)
+    Fu, umap = _open(F, topo, none)  # pinched vertices split
+    before = _topology(F, topo, (Fu, umap))
     if before.components != 1:
         raise MeshError(
             f"{name}: the chart has {before.components} edge-connected components; "
             "cut_to_disk handles one component at a time (split it with "
             "igl_heatseg.topology.face_components first)"
         )
-    none = np.zeros(len(topo.E), dtype=bool)
     if before.is_disk:
         return _finish(V, F, topo, none, before, "none")
-    # Split pinched vertices first; the rest works on a surface.
-    Fu, umap = _open(F, topo, none)
+    # The rest works on the surface with pinched vertices split.
     Vu = V[umap]
     topo_u = _relabel_topology(topo, Fu)
     g, b = before.genus, before.boundary_loops
@@ -640,19 +656,13 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
     else:
         method = "tree-cotree" if g > 0 else ("annulus" if b == 2 else "boundary-tree")
         paths = _tree_cotree_cut(Vu, Fu, topo_u, np.unique(topo_u.E[topo_u.boundary]))
-    cut = np.zeros(len(topo_u.E), dtype=bool)
-    for p in paths:
-        cut[_edge_ids(topo_u, Vu.shape[0], _path_edges(p))] = True
+    cut = _path_mask(topo_u, Vu.shape[0], paths)
     res = _finish(Vu, Fu, topo_u, cut, before, method, base_map=umap, paths=paths)
     if g > 0:
         # libigl's triangle-deletion cut graph (Gu et al. 2002) is sometimes shorter on
         # thin, many-handled parts: keep whichever valid disk cut is shorter.
         alt = [np.asarray(c, dtype=np.int64) for c in igl.cut_to_disk(Fu) if len(c) > 1]
-        cut2 = np.zeros(len(topo_u.E), dtype=bool)
-        for p in alt:
-            ids = _edge_ids(topo_u, Vu.shape[0], _path_edges(p))
-            cut2[ids[ids >= 0]] = True
-        cut2 &= topo_u.interior
+        cut2 = _path_mask(topo_u, Vu.shape[0], alt) & topo_u.interior
         length2 = _lengths(Vu, topo_u.E[cut2]).sum()
         if length2 < res.cut_length * (1 - 1e-12):
             res2 = _finish(Vu, Fu, topo_u, cut2, before, "igl-cut-to-disk", umap, alt)
@@ -730,8 +740,8 @@ def cut_along_paths(
     for v0, v1 in pairs:
         if int(v0) == int(v1):
             raise MeshError(f"{name}: cut path ({v0}, {v1}) starts and ends at the same vertex")
-    before = _topology(F, topo)
     Fu, umap = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
+    before = _topology(F, topo, (Fu, umap))
     Vu = np.ascontiguousarray(V[umap])
     topo_u = _relabel_topology(topo, Fu)
     # input vertex -> its first wedge (pinched vertices: the path starts in one of its fans)
@@ -758,9 +768,7 @@ def cut_along_paths(
         if path[-1] != a:  # pragma: no cover - igl.dijkstra returned a broken tree
             raise RuntimeError(f"{name}: igl.dijkstra gave no path {v0}-{v1}")
         paths.append(np.asarray(path[::-1], dtype=np.int64))
-    cut = np.zeros(len(topo_u.E), dtype=bool)
-    for p in paths:
-        cut[_edge_ids(topo_u, len(umap), _path_edges(p))] = True
+    cut = _path_mask(topo_u, len(umap), paths)
     res = _finish(Vu, Fu, topo_u, cut, before, "paths", base_map=umap, paths=paths)
     if not res.topology_after.is_disk:
         log.warning(

@@ -126,12 +126,21 @@ def plot_area_distribution(
         fig = ax.figure
     x = np.arange(1, a.size + 1)
     width = 0.8 if a.size < 200 else 1.0
-    ax.bar(x[kept], a[kept], width=width, color=KEPT_COLOR,
-           label=f"kept: {int(kept.sum())} groups")
-    ax.bar(x[~kept], a[~kept], width=width, color=DROPPED_COLOR,
-           label=f"dropped: {int((~kept).sum())} groups")
-    ax.axhline(thr, color=EPS_LINE_COLOR, lw=1.5, ls="--",
-               label=f"eps * A_largest = {eps:g} * {a[0]:.3g} = {thr:.3g}")
+    ax.bar(x[kept], a[kept], width=width, color=KEPT_COLOR, label=f"kept: {int(kept.sum())} groups")
+    ax.bar(
+        x[~kept],
+        a[~kept],
+        width=width,
+        color=DROPPED_COLOR,
+        label=f"dropped: {int((~kept).sum())} groups",
+    )
+    ax.axhline(
+        thr,
+        color=EPS_LINE_COLOR,
+        lw=1.5,
+        ls="--",
+        label=f"eps * A_largest = {eps:g} * {a[0]:.3g} = {thr:.3g}",
+    )
     if log_scale:
         pos = a[a > 0]
         ax.set_yscale("log")
@@ -196,14 +205,15 @@ def plot_chart_maps(
     pal = label_colors(max(c.label for c in ch) + 1) / 255.0
     for ax in axes.ravel():
         ax.set_axis_off()
-    for ax, i in zip(axes.ravel(), order):
+    for ax, i in zip(axes.ravel(), order, strict=False):  # more panels than charts
         c = ch[i]
         tri = c.UV[c.F]
         col = np.tile(pal[c.label], (len(c.F), 1))
         if len(c.flipped_faces):
             col[c.flipped_faces] = (1.0, 0.0, 0.0)
-        pc = PolyCollection(tri, facecolors=col, edgecolors=(0, 0, 0, 0.35) if edges else "none",
-                            linewidths=0.15)
+        pc = PolyCollection(
+            tri, facecolors=col, edgecolors=(0, 0, 0, 0.35) if edges else "none", linewidths=0.15
+        )
         ax.add_collection(pc)
         ax.set_xlim(tri[..., 0].min(), tri[..., 0].max())
         ax.set_ylim(tri[..., 1].min(), tri[..., 1].max())

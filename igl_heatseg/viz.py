@@ -117,6 +117,9 @@ CHECKER_COLORS = ((0.97, 0.97, 0.97), (0.25, 0.25, 0.30))
 SHARP_RADIUS: float = 0.0012
 CUT_RADIUS: float = 0.003
 
+#: Up to this many sharp edges are drawn at full radius; more get thinner curves.
+SHARP_EDGES_FULL: int = 2000
+
 #: Checker square size: the UV of every chart is rescaled to its 3D area, and the squares are
 #: this fraction of polyscope's length scale (the scene's bounding-box diagonal).
 CHECKER_FRACTION: float = 1.0 / 40.0
@@ -460,7 +463,15 @@ def add_curves(
 
 
 def add_sharp_edges(V: ArrayLike, sharp_edges: ArrayLike, name: str = "sharp edges", **kw):
-    """Draw the sharp edges (``Segmentation.sharp_edges``, (s, 2)) as dark curves."""
+    """Draw the sharp edges (``Segmentation.sharp_edges``, (s, 2)) as dark curves.
+
+    On noisy meshes with many sharp edges the curves get thinner (radius scaled by
+    ``sqrt(SHARP_EDGES_FULL / s)`` above :data:`SHARP_EDGES_FULL` edges) so that the seed
+    colours stay visible.
+    """
+    s = len(np.asarray(sharp_edges).reshape(-1, 2))
+    if "radius" not in kw and s > SHARP_EDGES_FULL:
+        kw["radius"] = SHARP_RADIUS * math.sqrt(SHARP_EDGES_FULL / s)
     return add_curves(V, sharp_edges, name, **kw)
 
 
@@ -517,7 +528,11 @@ def show_seeds(V, F, seg, mesh_name: str = "mesh", enabled: bool = True):
     polyscope.SurfaceMesh
     """
     ps = _polyscope()
-    m = ps.get_surface_mesh(mesh_name) if ps.has_surface_mesh(mesh_name) else add_mesh(V, F, mesh_name)
+    m = (
+        ps.get_surface_mesh(mesh_name)
+        if ps.has_surface_mesh(mesh_name)
+        else add_mesh(V, F, mesh_name)
+    )
     g = np.asarray(seg.seed_group)
     C = np.tile(np.asarray(NONSEED_COLOR), (len(g), 1))
     s = g >= 0
@@ -529,8 +544,15 @@ def show_seeds(V, F, seg, mesh_name: str = "mesh", enabled: bool = True):
     return m
 
 
-def show_temperature(V, F, seg, segment: int = 0, initial: bool = False, mesh_name: str = "mesh",
-                     enabled: bool = True):
+def show_temperature(
+    V,
+    F,
+    seg,
+    segment: int = 0,
+    initial: bool = False,
+    mesh_name: str = "mesh",
+    enabled: bool = True,
+):
     """Temperature field of one segment as a scalar map with isolines (Fig. 6b).
 
     Parameters
@@ -564,7 +586,11 @@ def show_temperature(V, F, seg, segment: int = 0, initial: bool = False, mesh_na
     # Stripes change at multiples of the period; 0 and 1 (whole seed regions) would flicker
     # between two stripes.  Shift by half a period (colour range shifted alike).
     half = 0.5 * ISOLINE_PERIOD
-    m = ps.get_surface_mesh(mesh_name) if ps.has_surface_mesh(mesh_name) else add_mesh(V, F, mesh_name)
+    m = (
+        ps.get_surface_mesh(mesh_name)
+        if ps.has_surface_mesh(mesh_name)
+        else add_mesh(V, F, mesh_name)
+    )
     m.add_scalar_quantity(
         f"temperature u_{segment}",
         u + half,
@@ -600,9 +626,14 @@ def show_labels(V, F, labels: ArrayLike, name: str, mesh_name: str = "mesh", ena
     polyscope.SurfaceMesh
     """
     ps = _polyscope()
-    m = ps.get_surface_mesh(mesh_name) if ps.has_surface_mesh(mesh_name) else add_mesh(V, F, mesh_name)
-    m.add_color_quantity(name, _rgb(np.asarray(labels, dtype=np.int64)), defined_on="faces",
-                         enabled=enabled)
+    m = (
+        ps.get_surface_mesh(mesh_name)
+        if ps.has_surface_mesh(mesh_name)
+        else add_mesh(V, F, mesh_name)
+    )
+    m.add_color_quantity(
+        name, _rgb(np.asarray(labels, dtype=np.int64)), defined_on="faces", enabled=enabled
+    )
     return m
 
 
@@ -630,7 +661,11 @@ def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cu
     ps = _polyscope()
     V = np.asarray(V)
     charts = as_chart_maps(charts)
-    m = ps.get_surface_mesh(mesh_name) if ps.has_surface_mesh(mesh_name) else add_mesh(V, F, mesh_name)
+    m = (
+        ps.get_surface_mesh(mesh_name)
+        if ps.has_surface_mesh(mesh_name)
+        else add_mesh(V, F, mesh_name)
+    )
     m.add_parameterization_quantity(
         "chart UV",
         corner_uv(V, np.asarray(F), charts),
@@ -665,7 +700,7 @@ def chart_layout(V: np.ndarray, charts: Sequence[ChartMap]) -> list[np.ndarray]:
     if not uvs:
         return []
     ext = []
-    for c, uv in zip(charts, uvs):
+    for c, uv in zip(charts, uvs, strict=True):
         used = uv[np.unique(c.F)]
         ext.append((used.min(axis=0), used.max(axis=0)))
     sizes = np.array([hi - lo for lo, hi in ext])
@@ -713,7 +748,7 @@ def show_chart_maps(V, charts, enabled: bool = True, edges: bool = True):
 
     pal = label_colors(k).astype(np.float64) / 255.0
     out = []
-    for i, (c, uv) in enumerate(zip(charts, placed)):
+    for i, (c, uv) in enumerate(zip(charts, placed, strict=True)):
         P = np.c_[uv, np.zeros(len(uv))]
         m = add_mesh(P, c.F, f"chart {i:03d}", color=tuple(pal[c.label]))
         m.set_enabled(enabled)
@@ -1028,7 +1063,8 @@ def _scene_points(V: ArrayLike, charts, planar: bool) -> np.ndarray:
     if not planar:
         return np.asarray(V)
     ch = as_chart_maps(charts)
-    uv = np.concatenate([p[np.unique(c.F)] for c, p in zip(ch, chart_layout(np.asarray(V), ch))])
+    placed = chart_layout(np.asarray(V), ch)
+    uv = np.concatenate([p[np.unique(c.F)] for c, p in zip(ch, placed, strict=True)])
     return np.c_[uv, np.zeros(len(uv))]
 
 
@@ -1079,8 +1115,12 @@ def render_scene(
     ps = init_polyscope(backend, headless=True)
     t = time.perf_counter()
     info = build_scene(V, F, seg, stage, charts=charts, segment=segment)
-    set_camera(_scene_points(V, charts, info["planar"]), size, planar=info["planar"],
-               direction=info["direction"])
+    set_camera(
+        _scene_points(V, charts, info["planar"]),
+        size,
+        planar=info["planar"],
+        direction=info["direction"],
+    )
     t_scene = time.perf_counter() - t
     t_shot = screenshot(png, size)
     log.info("rendered %s (%s) in %.2f s + %.2f s", png, stage, t_scene, t_shot)
@@ -1154,8 +1194,9 @@ def render(
     t = time.perf_counter()
     mesh, seg, charts = _load(mesh_path, theta, eps, stage in CHART_STAGES)
     t_pipe = time.perf_counter() - t
-    out = render_scene(mesh.V, mesh.F, seg, png, stage, charts=charts, size=size,
-                       segment=segment, backend=backend)
+    out = render_scene(
+        mesh.V, mesh.F, seg, png, stage, charts=charts, size=size, segment=segment, backend=backend
+    )
     out["seconds_pipeline"] = t_pipe
     return out
 
@@ -1196,12 +1237,23 @@ def view(
     want_charts = stage in CHART_STAGES if charts is None else charts
     mesh, seg, ch = _load(mesh_path, theta, eps, want_charts)
     ps = init_polyscope(backend)
-    info = build_scene(mesh.V, mesh.F, seg, stage, charts=ch, segment=segment,
-                       all_quantities=not (stage == "charts"))
+    info = build_scene(
+        mesh.V,
+        mesh.F,
+        seg,
+        stage,
+        charts=ch,
+        segment=segment,
+        all_quantities=not (stage == "charts"),
+    )
     if info["planar"]:
         ps.set_navigation_style("planar")
-    set_camera(_scene_points(mesh.V, ch, info["planar"]), ps.get_window_size(),
-               planar=info["planar"], direction=info["direction"])
+    set_camera(
+        _scene_points(mesh.V, ch, info["planar"]),
+        ps.get_window_size(),
+        planar=info["planar"],
+        direction=info["direction"],
+    )
     if ps.is_headless():
         ps.show(forFrames=1)
     else:  # pragma: no cover - needs a display
@@ -1271,31 +1323,52 @@ def register(subparsers) -> None:
     def common(p, with_stage=True):
         p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
         if with_stage:
-            p.add_argument("--stage", choices=STAGES, default="final",
-                           help="what to show (default: final segmentation)")
-            p.add_argument("--segment", type=int, default=None,
-                           help="segment whose temperature field --stage temperature shows "
-                           "(0 = largest; default: the one seen best)")
+            p.add_argument(
+                "--stage",
+                choices=STAGES,
+                default="final",
+                help="what to show (default: final segmentation)",
+            )
+            p.add_argument(
+                "--segment",
+                type=int,
+                default=None,
+                help="segment whose temperature field --stage temperature shows "
+                "(0 = largest; default: the one seen best)",
+            )
         add_segment_arguments(p)
 
-    p = subparsers.add_parser("view", help="open the polyscope viewer on one stage",
-                              description="Segment MESH and show a stage in polyscope.")
+    p = subparsers.add_parser(
+        "view",
+        help="open the polyscope viewer on one stage",
+        description="Segment MESH and show a stage in polyscope.",
+    )
     common(p)
     p.set_defaults(func=_cli_view, _parser=p)
 
     p = subparsers.add_parser(
-        "render", help="render a stage to a PNG without a display",
-        description="Segment MESH and render one stage headless (polyscope EGL backend).")
+        "render",
+        help="render a stage to a PNG without a display",
+        description="Segment MESH and render one stage headless (polyscope EGL backend).",
+    )
     common(p)
     p.add_argument("-o", "--output", required=True, help="PNG file to write")
-    p.add_argument("--size", type=int, nargs=2, metavar=("W", "H"), default=list(DEFAULT_SIZE),
-                   help=f"picture size in pixels (default {DEFAULT_SIZE[0]} {DEFAULT_SIZE[1]})")
+    p.add_argument(
+        "--size",
+        type=int,
+        nargs=2,
+        metavar=("W", "H"),
+        default=list(DEFAULT_SIZE),
+        help=f"picture size in pixels (default {DEFAULT_SIZE[0]} {DEFAULT_SIZE[1]})",
+    )
     p.set_defaults(func=_cli_render, _parser=p)
 
     p = subparsers.add_parser(
-        "plot-areas", help="plot the initial segment areas with the eps line (paper Fig. 12)",
+        "plot-areas",
+        help="plot the initial segment areas with the eps line (paper Fig. 12)",
         description="Segment MESH and plot the sorted areas of the initial segments with the "
-        "line eps * A_largest: groups below it are dropped. Use it to choose eps.")
+        "line eps * A_largest: groups below it are dropped. Use it to choose eps.",
+    )
     common(p, with_stage=False)
     p.add_argument("-o", "--output", required=True, help="PNG file to write")
     p.add_argument("--linear", action="store_true", help="linear area axis (default log)")
@@ -1321,8 +1394,15 @@ def _cli_view(args) -> int:
 def _cli_render(args) -> int:
     _check_params(args)
     try:
-        out = render(args.mesh, args.output, args.stage, tuple(args.size), args.theta, args.eps,
-                     segment=args.segment)
+        out = render(
+            args.mesh,
+            args.output,
+            args.stage,
+            tuple(args.size),
+            args.theta,
+            args.eps,
+            segment=args.segment,
+        )
     except RuntimeError as exc:  # no EGL: one line, not a traceback
         sys.stderr.write(f"igl-heatseg: error: {exc}\n")
         return 1
@@ -1335,6 +1415,11 @@ def _cli_plot_areas(args) -> int:
 
     _check_params(args)
     mesh, seg = _segment_file(args.mesh, args.theta, args.eps)
-    plot_area_distribution(seg.initial_areas, args.eps, args.output, log_scale=not args.linear,
-                           title=f"{Path(args.mesh).name}: initial segment areas")
+    plot_area_distribution(
+        seg.initial_areas,
+        args.eps,
+        args.output,
+        log_scale=not args.linear,
+        title=f"{Path(args.mesh).name}: initial segment areas",
+    )
     return 0

@@ -55,7 +55,8 @@ def picture(name, V, F, seg, stage, charts=None, size=(800, 600), **kw):
     """Render one stage headless and show the PNG inline."""
     png = OUT / f"{name}_{stage}.png"
     r = viz.render_scene(V, F, seg, png, stage, charts=charts, size=size, **kw)
-    print(f"{png.name}: scene {r['seconds_scene']:.2f} s, screenshot {r['seconds_screenshot']:.2f} s")
+    print(f"{png.name}: scene {r['seconds_scene']:.2f} s, "
+          f"screenshot {r['seconds_screenshot']:.2f} s")
     display(Image(filename=str(png), width=size[0] * 3 // 4))
     return png
 '''
@@ -135,10 +136,11 @@ NB1 = [
         "t = time.perf_counter()\n"
         "res = run_pipeline(mesh, None)\n"
         'print(f"pipeline: {time.perf_counter() - t:.1f} s")\n'
-        'print(f"{\'chart\':>5} {\'seg\':>4} {\'faces\':>6} {\'cut\':>12} {\'method\':>14} {\'bijective\':>9}")\n'
+        "print(f\"{'chart':>5} {'seg':>4} {'faces':>6} {'cut':>12} {'method':>14} \"\n"
+        "      f\"{'bijective':>9}\")\n"
         'for r in res.report["charts"]:\n'
-        '    print(f"{r[\'id\']:>5} {r[\'segment\']:>4} {r[\'faces\']:>6} {r[\'cut_method\']:>12} "\n'
-        '          f"{str(r[\'method\']):>14} {str(r[\'bijective\']):>9}")'
+        "    print(f\"{r['id']:>5} {r['segment']:>4} {r['faces']:>6} {r['cut_method']:>12} \"\n"
+        "          f\"{str(r['method']):>14} {str(r['bijective']):>9}\")"
     ),
     new_code_cell(
         'picture("fandisk", V, F, res.segmentation, "checker", charts=res.charts)\n'
@@ -189,12 +191,13 @@ NB2 = [
         '    s = res.report["parameterization"]\n'
         '    summary.append((name, s["charts_total"], s["charts_cut"], s["charts_bijective"],\n'
         '                    s["charts_fallback"], time.perf_counter() - t))\n'
-        '    print(name)\n'
+        "    print(name)\n"
         '    for r in res.report["charts"]:\n'
-        '        print(f"  chart {r[\'id\']:>2}: {r[\'faces\']:>5} faces, "\n'
-        '              f"loops before cut {r[\'topology\'][\'boundary_loops\']}, cut {r[\'cut_method\']:<12} "\n'
-        '              f"{str(r[\'method\']):<14} bijective={r[\'bijective\']} flips={r.get(\'flips\')} "\n'
-        '              f"overlaps={r.get(\'overlaps\')}")\n'
+        "        print(f\"  chart {r['id']:>2}: {r['faces']:>5} faces, \"\n"
+        "              f\"loops before cut {r['topology']['boundary_loops']}, \"\n"
+        "              f\"cut {r['cut_method']:<12} {str(r['method']):<14} \"\n"
+        "              f\"bijective={r['bijective']} flips={r.get('flips')} \"\n"
+        "              f\"overlaps={r.get('overlaps')}\")\n"
         "print()\n"
         "print(f\"{'mesh':<14}{'charts':>7}{'cut':>5}{'bijective':>10}{'fallback':>9}{'seconds':>9}\")\n"
         "for r in summary:\n"
@@ -258,7 +261,7 @@ NB3 = [
         "    counts = [segment_mesh(mesh, np.pi / 20, e, keep_solvers=False).num_segments\n"
         "              for e in EPSS]\n"
         "    ax.plot(EPSS, counts, 'o-', label=name)\n"
-        '    print(name, dict(zip(EPSS, counts)))\n'
+        "    print(name, dict(zip(EPSS, counts)))\n"
         'ax.set(xlabel="eps", ylabel="final segments"); ax.grid(alpha=.3); ax.legend()\n'
         "plt.tight_layout(); plt.show()"
     ),
@@ -292,7 +295,11 @@ def write(name: str, cells: list) -> Path:
     nb = new_notebook(cells=cells)
     for i, cell in enumerate(nb.cells):  # stable ids: regenerating changes nothing
         cell.id = f"cell-{i:02d}"
-    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    nb.metadata["kernelspec"] = {
+        "name": "python3",
+        "display_name": "Python 3",
+        "language": "python",
+    }
     nb.metadata["language_info"] = {"name": "python"}
     nbformat.validate(nb)
     path = HERE / name

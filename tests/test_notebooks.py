@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import ctypes
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -52,16 +51,21 @@ def test_notebooks_exist_and_are_stripped():
 def test_notebook_runs(path, tmp_path, monkeypatch):
     monkeypatch.setenv("IGL_HEATSEG_ROOT", str(ROOT))
     monkeypatch.setenv("IGL_HEATSEG_NB_OUT", str(tmp_path))
-    monkeypatch.setenv("IGL_HEATSEG_PS_BACKEND", "openGL3_egl" if _egl_loadable() else "openGL_mock")
+    monkeypatch.setenv(
+        "IGL_HEATSEG_PS_BACKEND", "openGL3_egl" if _egl_loadable() else "openGL_mock"
+    )
     monkeypatch.setenv("MPLBACKEND", "Agg")
     nb = nbformat.read(path, as_version=4)
     client = nbclient.NotebookClient(
-        nb, timeout=CELL_TIMEOUT, kernel_name="python3",
+        nb,
+        timeout=CELL_TIMEOUT,
+        kernel_name="python3",
         resources={"metadata": {"path": str(tmp_path)}},
     )
     client.execute()
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs
-              if o.output_type == "error"]
+    errors = [
+        o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"
+    ]
     assert not errors
     if path.name.startswith("01"):
         pngs = {p.name for p in tmp_path.glob("*.png")}

@@ -28,7 +28,11 @@ def test_area_plot_bars_line_and_legend(tmp_path):
     heights = [p.get_height() for p in ax.patches]
     assert sorted(heights, reverse=True) == heights  # sorted, decreasing
     assert heights == sorted(areas.tolist(), reverse=True)
-    kept = [p for p in ax.patches if np.allclose(p.get_facecolor()[:3], (0x1F / 255, 0x77 / 255, 0xB4 / 255))]
+    kept = [
+        p
+        for p in ax.patches
+        if np.allclose(p.get_facecolor()[:3], (0x1F / 255, 0x77 / 255, 0xB4 / 255))
+    ]
     assert len(kept) == 3  # 10, 2 and 0.5 (equal to the threshold is kept, as in segment_mesh)
     line = [ln for ln in ax.get_lines() if np.allclose(ln.get_ydata(), 0.5)]
     assert len(line) == 1
@@ -40,9 +44,10 @@ def test_area_plot_bars_line_and_legend(tmp_path):
 
 
 def test_area_plot_matches_segmentation_eps_round():
+    from pathlib import Path
+
     from igl_heatseg.io import load_mesh
     from igl_heatseg.segment import segment_mesh
-    from pathlib import Path
 
     seg = segment_mesh(load_mesh(Path(__file__).resolve().parent.parent / "data" / "fandisk.off"))
     fig = plots.plot_area_distribution(seg.initial_areas, seg.eps)
@@ -52,8 +57,12 @@ def test_area_plot_matches_segmentation_eps_round():
 
 @pytest.mark.parametrize(
     "areas, eps, msg",
-    [([], 0.05, "empty"), ([1.0, -1.0], 0.05, "non-negative"), ([1.0, np.nan], 0.05, "finite"),
-     ([1.0], 1.5, "eps")],
+    [
+        ([], 0.05, "empty"),
+        ([1.0, -1.0], 0.05, "non-negative"),
+        ([1.0, np.nan], 0.05, "finite"),
+        ([1.0], 1.5, "eps"),
+    ],
 )
 def test_area_plot_rejects_bad_input(areas, eps, msg):
     with pytest.raises(ValueError, match=msg):
@@ -63,8 +72,15 @@ def test_area_plot_rejects_bad_input(areas, eps, msg):
 def _square_chart(label, flipped=()):
     UV = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     F = np.array([[0, 1, 2], [0, 2, 3]])
-    return ChartMap(faces=np.array([0, 1]) + 2 * label, F=F, UV=UV, vertex_map=np.arange(4),
-                    label=label, bijective=not flipped, flipped_faces=np.array(flipped, int))
+    return ChartMap(
+        faces=np.array([0, 1]) + 2 * label,
+        F=F,
+        UV=UV,
+        vertex_map=np.arange(4),
+        label=label,
+        bijective=not flipped,
+        flipped_faces=np.array(flipped, int),
+    )
 
 
 def test_chart_maps_one_panel_per_chart_and_flips_red(tmp_path):

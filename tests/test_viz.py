@@ -44,7 +44,12 @@ def box_mesh(n: int = 6, size=(2.0, 1.0, 0.5)):
     uu, vv = np.meshgrid(g, g, indexing="ij")
     uu, vv = uu.ravel(), vv.ravel()
     idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    a, b, c, d = (
+        idx[:-1, :-1].ravel(),
+        idx[1:, :-1].ravel(),
+        idx[1:, 1:].ravel(),
+        idx[:-1, 1:].ravel(),
+    )
     quad = np.r_[np.c_[a, b, c], np.c_[a, c, d]]
     for axis in range(3):
         for s in (0.0, 1.0):
@@ -125,7 +130,9 @@ def test_segment_boundary_edges_of_box(box):
     mesh, _ = box
     V, F = mesh.V, mesh.F
     N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    side = np.argmax(np.abs(N), axis=1) * 2 + (N[np.arange(len(F)), np.argmax(np.abs(N), axis=1)] > 0)
+    side = np.argmax(np.abs(N), axis=1) * 2 + (
+        N[np.arange(len(F)), np.argmax(np.abs(N), axis=1)] > 0
+    )
     E = viz.segment_boundary_edges(F, side)  # one label per box side: the 12 box edges
     assert len(E) == 12 * 6
     d = np.abs(V[E[:, 0]] - V[E[:, 1]])
@@ -150,13 +157,15 @@ def test_corner_uv_matches_3d_area_and_layout_does_not_overlap(box, box_charts):
     a, b = UVc[:, 1] - UVc[:, 0], UVc[:, 2] - UVc[:, 0]
     a2 = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
     a3 = 0.5 * np.linalg.norm(
-        np.cross(mesh.V[mesh.F[:, 1]] - mesh.V[mesh.F[:, 0]], mesh.V[mesh.F[:, 2]] - mesh.V[mesh.F[:, 0]]),
+        np.cross(
+            mesh.V[mesh.F[:, 1]] - mesh.V[mesh.F[:, 0]], mesh.V[mesh.F[:, 2]] - mesh.V[mesh.F[:, 0]]
+        ),
         axis=1,
     )
     for c in cm:
         assert a2[c.faces].sum() == pytest.approx(a3[c.faces].sum(), rel=1e-9)
     boxes = []
-    for c, uv in zip(cm, viz.chart_layout(mesh.V, cm)):
+    for c, uv in zip(cm, viz.chart_layout(mesh.V, cm), strict=True):
         used = uv[np.unique(c.F)]
         boxes.append((used.min(axis=0), used.max(axis=0)))
     for i in range(len(boxes)):
@@ -237,13 +246,17 @@ def _parser():
 
 def test_cli_parses_and_bad_mesh_gives_mesh_error(tmp_path):
     p = _parser()
-    args = p.parse_args(["render", "m.off", "-o", "x.png", "--stage", "seeds", "--size", "320", "240"])
+    args = p.parse_args(
+        ["render", "m.off", "-o", "x.png", "--stage", "seeds", "--size", "320", "240"]
+    )
     assert args.stage == "seeds" and args.size == [320, 240] and args.segment is None
     bad = tmp_path / "bad.off"
     bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
-    for argv in (["render", str(bad), "-o", str(tmp_path / "x.png")],
-                 ["plot-areas", str(bad), "-o", str(tmp_path / "a.png")],
-                 ["view", str(bad)]):
+    for argv in (
+        ["render", str(bad), "-o", str(tmp_path / "x.png")],
+        ["plot-areas", str(bad), "-o", str(tmp_path / "a.png")],
+        ["view", str(bad)],
+    ):
         args = p.parse_args(argv)
         with pytest.raises(MeshError, match="bad.off"):
             args.func(args)
@@ -286,8 +299,12 @@ def _render_subprocess(code: str, tmp_path: Path) -> dict:
     script = tmp_path / "render.py"
     script.write_text(textwrap.dedent(code))
     r = subprocess.run(
-        [sys.executable, str(script)], capture_output=True, text=True, env=env,
-        timeout=RENDER_TIMEOUT, cwd=tmp_path,
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=RENDER_TIMEOUT,
+        cwd=tmp_path,
     )
     assert r.returncode == 0, r.stderr[-2000:]
     return json.loads(r.stdout.strip().splitlines()[-1])

@@ -226,3 +226,25 @@ def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
     assert "atlas_error" in side.report
     assert res.report["parameterization"]["charts_in_atlas"] == 2
     assert np.all(res.corner_uv[side.faces] == 0)
+
+
+def test_compose_user_path_then_auto_cut():
+    from test_cut import plate_with_holes
+
+    from igl_heatseg.cut import cut_along_paths, cut_to_disk
+    from igl_heatseg.pipeline import _compose
+
+    V, F = plate_with_holes()  # 20 x 20 cells, holes at cells (4..6, 4..6) and (12..14, 10..12)
+    first = cut_along_paths(V, F, [(4 * 21 + 0, 4 * 21 + 4)])  # border -> hole 1, 4 edges
+    assert first.topology_after.boundary_loops == 2
+    res = _compose(first, cut_to_disk(first.V, first.F))
+    assert res.topology_after.is_disk
+    assert res.topology_before == first.topology_before
+    np.testing.assert_array_equal(res.vertex_map[res.F], F)  # corners keep input vertices
+    assert first.cut_length == pytest.approx(0.2)
+    # total = both stages, and it is the length of the listed cut edges (input ids)
+    E = res.cut_edges
+    assert res.cut_length == pytest.approx(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).sum())
+    assert res.cut_length > first.cut_length
+    assert len(res.cut_edges) == len(np.unique(np.sort(res.cut_edges, axis=1), axis=0))
+    assert res.method == "paths+annulus"

@@ -11,7 +11,7 @@ Stages (:data:`STAGES`):
     Seed vertices coloured by seed group, non-seed vertices dark, sharp edges as curves
     (Fig. 6a).
 ``temperature``
-    One temperature field ``u_i`` as a scalar map with contour isolines (Fig. 6b).
+    One temperature field ``u_i`` as a scalar map with isoline stripes (Fig. 6b).
 ``initial``
     The initial over-segmentation, one categorical colour per initial group (Fig. 11).
 ``final``
@@ -767,7 +767,7 @@ def build_scene(
     V: ArrayLike,
     F: ArrayLike,
     seg,
-    stage: str = "final",
+    stage: Stage = "final",
     charts=None,
     segment: int | None = None,
     all_quantities: bool = False,
@@ -822,8 +822,11 @@ def build_scene(
         show_seeds(V, F, seg, enabled=on["seeds"])
     if stage == "temperature":
         show_temperature(V, F, seg, segment=segment)
-    elif all_quantities and seg._solvers[1] is not None:  # fields kept by segment_mesh
-        show_temperature(V, F, seg, segment=segment, enabled=False)
+    elif all_quantities:
+        try:
+            show_temperature(V, F, seg, segment=segment, enabled=False)
+        except RuntimeError:  # fields not kept (segment_mesh(..., keep_solvers=False))
+            log.debug("no temperature fields to show")
     if stage == "initial" or all_quantities:
         show_labels(V, F, seg.initial_labels, "initial segmentation", enabled=on["initial"])
     if stage == "final" or all_quantities:
@@ -1073,7 +1076,7 @@ def render_scene(
     F: ArrayLike,
     seg,
     png: str | os.PathLike,
-    stage: str = "final",
+    stage: Stage = "final",
     charts=None,
     size: tuple[int, int] = DEFAULT_SIZE,
     segment: int | None = None,
@@ -1156,7 +1159,7 @@ def _load(mesh_path, theta: float, eps: float, need_charts: bool):
 def render(
     mesh_path: str | os.PathLike,
     png: str | os.PathLike,
-    stage: str = "final",
+    stage: Stage = "final",
     size: tuple[int, int] = DEFAULT_SIZE,
     theta: float = THETA_DEFAULT,
     eps: float = EPS_DEFAULT,
@@ -1203,7 +1206,7 @@ def render(
 
 def view(
     mesh_path: str | os.PathLike,
-    stage: str = "final",
+    stage: Stage = "final",
     theta: float = THETA_DEFAULT,
     eps: float = EPS_DEFAULT,
     segment: int | None = None,

@@ -26,6 +26,9 @@ KEPT_COLOR = "#1f77b4"
 DROPPED_COLOR = "#bbbbbb"
 EPS_LINE_COLOR = "#d62728"
 
+#: Above this many groups the x axis (rank) is logarithmic, so the few large groups stay visible.
+LOG_RANK_ABOVE: int = 200
+
 #: Figure DPI for files.
 DPI: int = 150
 
@@ -83,7 +86,8 @@ def plot_area_distribution(
     """Bar chart of the sorted initial segment areas with the line ``eps * A_largest`` (Fig. 12).
 
     Bars above the line (kept groups) are blue, bars below (dropped) grey; the legend gives
-    how many of each.  This is how a user chooses eps: the line should sit in the gap between
+    how many of each.  With more than :data:`LOG_RANK_ABOVE` groups the rank axis is
+    logarithmic too.  This is how a user chooses eps: the line should sit in the gap between
     the real faces of the part and the noise groups.
 
     Parameters
@@ -146,8 +150,13 @@ def plot_area_distribution(
         ax.set_yscale("log")
         if pos.size:
             ax.set_ylim(pos.min() * 0.5, a[0] * 2)
-    ax.set_xlim(0.3, a.size + 0.7)
-    ax.set_xlabel("initial segment (sorted by area)")
+    if a.size > LOG_RANK_ABOVE:
+        ax.set_xscale("log")
+        ax.set_xlim(0.5, a.size * 1.1)
+    else:
+        ax.set_xlim(0.3, a.size + 0.7)
+    many = a.size > LOG_RANK_ABOVE
+    ax.set_xlabel("initial segment, sorted by area" + (" (rank, log scale)" if many else ""))
     ax.set_ylabel("area" + (" (log scale)" if log_scale else ""))
     ax.set_title(title or "Initial segment areas")
     ax.legend(loc="upper right", fontsize=9)

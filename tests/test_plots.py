@@ -103,3 +103,9 @@ def test_sweep_plot(tmp_path):
     assert out.read_bytes()[:8] == PNG_MAGIC
     assert len(fig.axes) == 2
     assert list(fig.axes[0].get_lines()[0].get_ydata()) == [30, 15, 8]
+
+
+def test_area_plot_rank_axis_log_for_many_groups():
+    few = plots.plot_area_distribution(np.geomspace(1, 1e-3, plots.LOG_RANK_ABOVE), 0.05)
+    many = plots.plot_area_distribution(np.geomspace(1, 1e-3, plots.LOG_RANK_ABOVE + 1), 0.05)
+    assert few.axes[0].get_xscale() == "linear" and many.axes[0].get_xscale() == "log"

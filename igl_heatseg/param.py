@@ -18,7 +18,11 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
    rank-2 part is used, which reduces to the 2 x 2 correction when ``d = 2``.
 4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
    is turned over (``u -> -u``), not counted as flipped.
-5. If not bijective: a Tutte map (uniform weights, boundary on a circle by arc length) is
+5. If not bijective and the Hessian map only has local defects (flips, no boundary overlap):
+   :func:`repair_map` re-solves a small region around them harmonically (uniform weights),
+   growing it ring by ring; a certified result that raises the symmetric Dirichlet energy by
+   at most :data:`REPAIR_MAX_SD_RATIO` is ``"hessian-<energy>+repair"``.
+6. Otherwise: a Tutte map (uniform weights, boundary on a circle by arc length) is
    bijective by construction (Floyd/Tutte); it is improved by SLIM (symmetric Dirichlet), one
    iteration at a time with the certificate after each, keeping the last bijective iterate.
    Free boundary first; if its boundary starts to overlap before the last iteration, SLIM
@@ -65,6 +69,7 @@ __all__ = [
     "hessian_map",
     "gram_correction",
     "tutte_map",
+    "repair_map",
     "distortion",
     "compare_methods",
     "METHODS",
@@ -96,6 +101,19 @@ MAX_NULL_DIM: int = 6
 
 #: SLIM iterations of the Tutte fallback's improvement.
 SLIM_ITERATIONS: int = 30
+
+#: Local repair of a Hessian map with a few flips: rounds of growing the free region by one
+#: ring around the offending vertices (uniform-weight harmonic re-solve of the free region).
+REPAIR_ROUNDS: int = 4
+
+#: The repair gives up when its free region would exceed this fraction of the vertices (or
+#: :data:`REPAIR_MIN_FREE` vertices, whichever is larger).
+REPAIR_MAX_FRACTION: float = 0.2
+REPAIR_MIN_FREE: int = 64
+
+#: A repaired Hessian map is kept only if its symmetric Dirichlet energy is at most this
+#: factor above the (flipped) Hessian map's: a repair must not damage the map.
+REPAIR_MAX_SD_RATIO: float = 1.05
 
 #: Soft-constraint weight holding the boundary in the fixed-boundary SLIM variant.
 SLIM_SOFT_P: float = 1e5
@@ -404,6 +422,94 @@ def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np
     return UV
 
 
+def _mean_value_laplacian(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
+    """(n, n) ``diag(rowsum W) - W`` with Floater's mean value weights (positive, asymmetric)
+    ``W[i, j] = (tan(a/2) + tan(b/2)) / |x_i - x_j|``, ``a, b`` the angles at ``i`` next to
+    the edge ``(i, j)``."""
+    n = V.shape[0]
+    rows, cols, vals = [], [], []
+    for c in range(3):
+        i, j, k = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
+        eij = V[j] - V[i]
+        eik = V[k] - V[i]
+        lij = np.linalg.norm(eij, axis=1)
+        lik = np.linalg.norm(eik, axis=1)
+        cosa = np.clip((eij * eik).sum(1) / np.maximum(lij * lik, 1e-300), -1.0, 1.0)
+        t = np.tan(0.5 * np.arccos(cosa))
+        rows += [i, i]
+        cols += [j, k]
+        vals += [t / np.maximum(lij, 1e-300), t / np.maximum(lik, 1e-300)]
+    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    return (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
+
+
+def repair_map(
+    UV: np.ndarray, V: np.ndarray, F: np.ndarray, cert: Certificate, name: str = "chart",
+    rounds: int = REPAIR_ROUNDS, max_fraction: float = REPAIR_MAX_FRACTION,
+) -> tuple[np.ndarray, Certificate, int]:
+    """Untangle a map with a few local flips by re-solving a small region harmonically.
+
+    The free region starts as the vertices of the flipped and degenerate triangles (and wound
+    vertices) and grows by one ring per round; its vertices are re-solved as the mean value
+    (Floater) weighted average of their neighbours, weights from the 3D triangles, with every
+    other vertex fixed.  Stops at the first
+    round whose certificate is bijective.  Boundary overlaps are not repaired (returned as is).
+
+    Parameters
+    ----------
+    UV : (n, 2) float64
+        Map with the dominant orientation counter-clockwise.
+    V : (n, 3) float64
+        Chart vertices (for the weights).
+    F : (m, 3) int64
+        Triangles.
+    cert : Certificate
+        Certificate of ``UV``.
+
+    Returns
+    -------
+    UV : (n, 2) float64
+        Repaired map (the input where nothing was changed).
+    cert : Certificate
+        Its certificate.
+    rounds : int
+        Rounds used (0: nothing to do or overlaps).
+    """
+    n = UV.shape[0]
+    if cert.bijective or cert.overlaps > 0:
+        return UV, cert, 0
+    E = _edges(F)
+    A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+                      shape=(n, n))
+    L = _mean_value_laplacian(V, F)
+    free = np.zeros(n, dtype=bool)
+    free[F[np.r_[cert.flipped_faces, cert.degenerate_faces]].ravel()] = True
+    free[cert.wound_vertices] = True
+    best_UV, best_cert = UV, cert
+    for r in range(1, rounds + 1):
+        free = free | (A @ free.astype(np.float64) > 0)
+        if free.sum() > max(max_fraction * n, REPAIR_MIN_FREE) or (~free).sum() < 3:
+            break
+        fi = np.flatnonzero(free)
+        fx = np.flatnonzero(~free)
+        rhs = -(L[fi][:, fx] @ UV[fx])
+        solve = spla.factorized(L[fi][:, fi].tocsc())
+        UVr = UV.copy()
+        UVr[fi, 0] = solve(rhs[:, 0])
+        UVr[fi, 1] = solve(rhs[:, 1])
+        c = certify_map(UVr, F, name=name)
+        if c.mirrored:  # the repair never mirrors a map; treat as failure
+            continue
+        if c.bijective:
+            return UVr, c, r
+        if c.flips + c.degenerate + c.wound < (
+            best_cert.flips + best_cert.degenerate + best_cert.wound
+        ):
+            best_UV, best_cert = UVr, c
+    return best_UV, best_cert, rounds
+
+
 def _slim_data(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, b=None, bc=None, energy=None):
     if energy is None:
         energy = igl.MappingEnergyType.SYMMETRIC_DIRICHLET
@@ -663,6 +769,7 @@ def parameterize_chart(
     *,
     fallback: Literal["tutte+slim", "tutte", "none"] = "tutte+slim",
     slim_iterations: int = SLIM_ITERATIONS,
+    repair: bool = True,
     name: str = "chart",
     **energy_kwargs,
 ) -> ChartParam:
@@ -685,6 +792,9 @@ def parameterize_chart(
         non-bijective Hessian map, flagged).
     slim_iterations : int
         SLIM iterations for ``"tutte+slim"``.
+    repair : bool
+        Before falling back, try :func:`repair_map` on a Hessian map with local flips (no
+        boundary overlaps); if that is bijective the method is ``"hessian-<energy>+repair"``.
     name : str
         Chart name for messages.
     **energy_kwargs
@@ -751,6 +861,19 @@ def parameterize_chart(
             log.info("%s: %s not bijective (flips %d, overlaps %d, degenerate %d, wound %d); "
                      "falling back to %s", name, method, cert.flips, cert.overlaps,
                      cert.degenerate, cert.wound, fallback)
+        repaired = False
+        if repair and cert is not None and cert.overlaps == 0:
+            t = time.perf_counter()
+            UVr, cert_r, rounds = repair_map(UVc, Vn, Fc, cert, name)
+            sd0 = distortion(Vn, Fc, UVc)["sym_dirichlet"]
+            sd1 = distortion(Vn, Fc, UVr)["sym_dirichlet"]
+            keep = cert_r.bijective and sd1 <= REPAIR_MAX_SD_RATIO * sd0
+            attempts.append({"method": f"{method}+repair", "rounds": rounds, **cert_r.summary(),
+                             "sym_dirichlet_ratio": float(sd1 / sd0) if sd0 > 0 else None,
+                             "kept": bool(keep), "seconds": time.perf_counter() - t})
+            if keep:
+                UVc, cert, method, repaired = UVr, cert_r, f"{method}+repair", True
+    if used_fallback and not repaired:
         t = time.perf_counter()
         UVt = tutte_map(Vn, Fc, bnd)
         UVt, cert_t = _finish(UVt, Vn, Fc, name)

@@ -13,6 +13,7 @@ from igl_heatseg.param import (
     gram_correction,
     map_chart,
     parameterize_chart,
+    repair_map,
     tutte_map,
 )
 
@@ -168,6 +169,25 @@ def test_fallback_on_non_bijective_hessian_map():
     # No fallback: the flagged Hessian map is returned as is.
     raw = parameterize_chart(V, F, "hlle", fallback="none")
     assert raw.method == "hessian-hlle" and not raw.bijective and raw.flips > 0
+
+
+def test_repair_untangles_a_local_fold():
+    """Mean value weights reproduce linear maps, so repairing a fold in an isometric map of a
+    flat grid restores the isometry exactly."""
+    from igl_heatseg.bijectivity import certify_map
+
+    V, F = grid(6, 6, jitter=0.25, seed=1)
+    UV = V[:, :2].copy()
+    centre = 3 * 7 + 3
+    UV[centre] += [0.4, 0.3]  # across its one-ring: local flips
+    cert = certify_map(UV, F)
+    assert cert.flips > 0 and cert.overlaps == 0
+    UVr, cert_r, rounds = repair_map(UV, V, F, cert)
+    assert cert_r.bijective and rounds >= 1
+    assert np.abs(UVr - V[:, :2]).max() < 1e-12
+    # Nothing to do on a bijective map; overlaps are not repaired.
+    same, _, r0 = repair_map(V[:, :2], V, F, certify_map(V[:, :2], F))
+    assert r0 == 0 and np.array_equal(same, V[:, :2])
 
 
 def test_tutte_is_bijective_on_bad_triangles():

@@ -4,8 +4,8 @@
 a generic comparison function: on the 1M-face benchmark mesh ``validate_mesh`` spent most of
 its time in three such calls (vertex dedup, unique edges, corner/fan pairs) and
 ``edge_topology`` in one.  Here rows of two non-negative integers are packed into one int64
-key (numpy's vectorized integer sort), and other rows are ordered with ``np.lexsort`` on
-their columns.  Results are identical to ``np.unique(A, axis=0, ...)`` (tested in
+key and argsorted (numpy's vectorized integer sort; 1-D ``np.unique`` would hash, slower
+here), and other rows are ordered with ``np.lexsort`` on their columns.  Results are identical to ``np.unique(A, axis=0, ...)`` (tested in
 ``tests/test_fast_utils.py``); for float rows equal up to the sign of zero, which compares
 equal either way.
 """
@@ -46,22 +46,22 @@ def unique_rows(
         if return_counts:
             out.append(np.zeros(0, dtype=np.int64))
         return out[0] if len(out) == 1 else tuple(out)
+    key = None
     if A.dtype.kind in "iu" and A.shape[1] == 2 and A.min() >= 0:
         b = np.int64(A[:, 1].max()) + 1
         if A[:, 0].max() < np.iinfo(np.int64).max // b:
             key = A[:, 0].astype(np.int64) * b + A[:, 1]
-            res = np.unique(key, return_inverse=return_inverse, return_counts=return_counts)
-            if not (return_inverse or return_counts):
-                res = (res,)
-            k = res[0]
-            U = np.stack([k // b, k % b], axis=1).astype(A.dtype)
-            out = [U] + [np.asarray(x, dtype=np.int64).reshape(-1) for x in res[1:]]
-            return out[0] if len(out) == 1 else tuple(out)
-    order = np.lexsort(A.T[::-1])
-    S = A[order]
     new = np.empty(r, dtype=bool)
     new[0] = True
-    new[1:] = (S[1:] != S[:-1]).any(axis=1)
+    if key is not None:
+        order = np.argsort(key)  # int64 sort: vectorized, unlike void-row sorts
+        ks = key[order]
+        new[1:] = ks[1:] != ks[:-1]
+        S = A[order]
+    else:
+        order = np.lexsort(A.T[::-1])
+        S = A[order]
+        new[1:] = (S[1:] != S[:-1]).any(axis=1)
     starts = np.flatnonzero(new)
     out = [S[starts]]
     if return_inverse:

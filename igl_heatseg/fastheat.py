@@ -83,9 +83,11 @@ PATCH_VERTICES: int = 2000
 #: Use exact global solves when ``k * n_free`` is at most this (few groups).
 EXACT_WORK: float = 2.0e7
 
-#: Groups this sparse (free vertices per group) reach far: local domains would not certify
-#: (noisy 1M-face mesh, second round: 770 free vertices per group), so solve exactly.
-LOCAL_MAX_FREE_PER_GROUP: float = 200.0
+#: Groups this sparse (free vertices per group) reach far: local domains would not certify,
+#: so solve exactly.  Measured: first rounds on scans have 10-13 free vertices per group
+#: (90 % of free vertices within 2-3 hops of a seed), second rounds 150 or more (6 hops);
+#: forcing local solves on the noisy 200k mesh's second round left 16k vertices uncertified.
+LOCAL_MAX_FREE_PER_GROUP: float = 50.0
 
 #: Candidates (lower bounds) kept per vertex and per face.
 TOPK: int = 4
@@ -98,8 +100,8 @@ CERT_FACTOR: float = 2.0
 #: Absolute margin covering round-off differences between two direct solves.
 CERT_ABS: float = 1e-9
 
-#: Right-hand sides per batch in exact solves (dense ``n_free x batch`` work arrays).
-_BATCH_BYTES = 128 * 2**20
+#: Dense work arrays per batch of exact fields (``(2n + m) x batch`` float64) stay below this.
+_BATCH_BYTES = 512 * 2**20
 
 #: Right-hand sides per global CHOLMOD solve in the fallback (cholespy's multi-RHS solve is
 #: fastest per column at 16-32 columns; 256 at once is 2.7x slower per column, measured).
@@ -338,7 +340,7 @@ class FastHeatSolver:
         self.stats["mode"] = "exact"
         n, F = self.n, self.F
         m = F.shape[0]
-        batch = int(np.clip(_BATCH_BYTES // (8 * (2 * n + m)), 1, 256))
+        batch = int(np.clip(_BATCH_BYTES // (8 * (2 * n + m)), 1, _SOLVE_BATCH))
         vmax = np.full(n, -np.inf)
         varg = np.zeros(n, dtype=np.int64)
         fmax = np.full(m, -np.inf)

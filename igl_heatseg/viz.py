@@ -676,10 +676,10 @@ def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cu
         checker_colors=CHECKER_COLORS,
         checker_size=CHECKER_FRACTION,  # "world" coords: relative to polyscope's length scale
     )
-    if cuts and enabled:
-        cut = [c.cut_edges for c in charts if len(c.cut_edges)]
-        if cut:
-            add_curves(V, np.concatenate(cut), "cut paths", color=CUT_COLOR, radius=CUT_RADIUS)
+    cut = [c.cut_edges for c in charts if len(c.cut_edges)]
+    if cuts and cut:
+        net = add_curves(V, np.concatenate(cut), "cut paths", color=CUT_COLOR, radius=CUT_RADIUS)
+        net.set_enabled(enabled)
     return m
 
 

@@ -16,11 +16,12 @@ Pipeline of :func:`segment_robust`:
    (default :data:`ROBUST_THETA`, 0.7 rad = 40 deg, not the paper's 9 deg: on a mesh of edge
    length ``h`` a fillet or hole of radius ``r`` turns ``h / r`` per edge, which at CAD
    tessellation sizes is 15-35 deg; machined creases are 45 deg or more).  Vertices on a crease
-   and ``crease_dilation`` rings around it are not seeds (curvature fits there straddle the
-   crease).
+   (and ``crease_dilation`` rings around it, default 0) are not seeds.
 3. **Curvature classes** replace the dihedral test for tangent-continuous (G1) boundaries that no
    dihedral angle can see (a fillet meets its planes at 0 deg).  Principal curvatures of the
-   denoised surface (``igl.principal_curvature``, quadric fit over a ``curvature_ring``-ring):
+   denoised surface cut open along the creases (:func:`split_along_creases`: no quadric fit
+   straddles a crease; without the cut, narrow planes next to creases had no flat seeds at
+   all), ``igl.principal_curvature`` over a ``curvature_ring``-ring:
    a vertex is *flat* if ``max |k| * h < flat_curvature``, *umbilic* if
    ``min |k| >= anisotropy * max |k|`` (sphere-like), otherwise *cylindrical* with an axis (the
    direction of least curvature).  Seed groups are the connected components of seed vertices
@@ -64,6 +65,7 @@ __all__ = [
     "bilateral_normals",
     "denoise_vertices",
     "curvature_classes",
+    "split_along_creases",
     "fit_plane",
     "fit_sphere",
     "fit_cylinder",
@@ -114,7 +116,7 @@ VERTEX_ITERATIONS: int = 10
 CURVATURE_RING: int = 2
 
 #: Rings around creases that hold no seeds.
-CREASE_DILATION: int = 1
+CREASE_DILATION: int = 0
 
 #: Primitive type: a simpler fit is chosen when its RMS distance is within this many mean edge
 #: lengths of the best fit's.
@@ -245,6 +247,53 @@ def denoise_vertices(
 # --------------------------------------------------------------------------------------------
 # Curvature classes
 # --------------------------------------------------------------------------------------------
+
+
+def split_along_creases(
+    F: np.ndarray, sharp: np.ndarray, topo=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Duplicate vertices so that the faces on the two sides of a crease share none.
+
+    Corners of one vertex stay together when their faces share a non-sharp interior edge
+    through it; each group of corners becomes one new vertex.  Curvature fits on the result
+    never straddle a crease.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    sharp : (ne,) bool
+        Crease edges, indexed like ``edge_topology(F).E``.
+    topo : EdgeTopology, optional
+
+    Returns
+    -------
+    F2 : (m, 3) int64
+        Faces indexing the new vertices.
+    orig : (n2,) int64
+        New vertex -> input vertex.
+    """
+    topo = edge_topology(F) if topo is None else topo
+    m = F.shape[0]
+    keep = np.flatnonzero(topo.interior & ~sharp)
+    f0, f1 = topo.EF[keep, 0], topo.EF[keep, 1]
+    rows, cols = [], []
+    for k in range(2):
+        v = topo.E[keep, k]
+        j0 = np.argmax(F[f0] == v[:, None], axis=1)
+        j1 = np.argmax(F[f1] == v[:, None], axis=1)
+        rows.append(j0 * m + f0)
+        cols.append(j1 * m + f1)
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    # corners of the same vertex in the same face are distinct nodes; also tie each corner to
+    # itself so that isolated corners form their own component
+    A = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+    _, comp = connected_components(A, directed=False)
+    _, comp = np.unique(comp, return_inverse=True)
+    comp = comp.reshape(-1)
+    F2 = comp.reshape(3, m).T.copy()
+    orig = np.empty(int(comp.max()) + 1, dtype=np.int64)
+    orig[comp] = F.T.ravel()
+    return F2.astype(np.int64), orig
 
 
 def curvature_classes(
@@ -547,7 +596,13 @@ def segment_robust(
             crease = crease | ((adj @ crease.astype(np.float64)) > 0)
         seed &= ~crease
     band = off_crease & ~seed  # near a crease: no seed of its own, but not on the crease
-    cls, axis = curvature_classes(W, F, h, flat_curvature, anisotropy, curvature_ring)
+    F2, orig = split_along_creases(F, sharp, topo)
+    cls2, axis2 = curvature_classes(W[orig], F2, h, flat_curvature, anisotropy, curvature_ring)
+    # a seed vertex lies on no crease, so it has exactly one copy
+    cls = np.zeros(n, dtype=np.int64)
+    axis = np.zeros((n, 3))
+    cls[orig] = cls2
+    axis[orig] = axis2
     a, b = E[:, 0], E[:, 1]
     join = seed[a] & seed[b] & (cls[a] == cls[b])
     join &= (cls[a] != 1) | (np.abs((axis[a] * axis[b]).sum(axis=1)) > math.cos(axis_angle))

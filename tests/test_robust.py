@@ -174,3 +174,26 @@ def test_robust_mode_separates_fillets_on_a_generated_part():
         assert purity(seg.labels, p.labels, area) >= 0.9
         assert coverage(seg.labels, p.labels, area) >= 0.85
         assert seg.num_segments >= 18  # fillets are segments of their own (paper mode: 1)
+
+
+def test_split_along_creases_separates_cube_sides():
+    from igl_heatseg.robust import split_along_creases
+    from igl_heatseg.topology import edge_topology
+
+    V, F, side = fine_box(2)
+    topo = edge_topology(F)
+    sharp = np.zeros(len(topo.E), dtype=bool)
+    inner = topo.interior
+    sharp[inner] = side[topo.EF[inner, 0]] != side[topo.EF[inner, 1]]
+    F2, orig = split_along_creases(F, sharp, topo)
+    assert np.array_equal(orig[F2], F)  # same geometry
+    # every side becomes its own component, no vertex shared between sides
+    for s in range(6):
+        used = np.unique(F2[side == s])
+        others = np.unique(F2[side != s])
+        assert len(np.intersect1d(used, others)) == 0
+    # corners get 3 copies (2 extra), the 3 inner vertices of each of the 12 cube edges 2 (1 extra)
+    assert len(orig) == len(V) + 8 * 2 + 12 * 3
+    # nothing sharp: nothing split
+    F3, orig3 = split_along_creases(F, np.zeros(len(topo.E), dtype=bool), topo)
+    assert len(orig3) == len(V) and np.array_equal(orig3[F3], F)

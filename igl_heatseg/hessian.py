@@ -540,8 +540,11 @@ def curved_hessian_energy(V: ArrayLike, F: ArrayLike) -> sp.csr_matrix:
     Returns
     -------
     K : (n, n) scipy.sparse.csr_matrix of float64
-        Symmetric (symmetrised against rounding) positive semidefinite; its null space on a
-        developable chart contains the constants and the intrinsic coordinates ``(s, t)``.
+        Symmetric (symmetrised against rounding).  Positive semidefinite on flat and
+        developable charts, whose null space contains the constants and the intrinsic
+        coordinates ``(s, t)``; on doubly curved charts libigl's matrix can be indefinite
+        (measured on rocker-arm charts: generalized eigenvalues down to about -35 on a
+        unit-area chart).
 
     Raises
     ------
@@ -568,7 +571,7 @@ def hessian_energy(
     Returns
     -------
     K : (n, n) scipy.sparse.csr_matrix
-        Symmetric positive semidefinite Hessian energy.
+        Symmetric Hessian energy (see the two functions for definiteness).
     """
     if energy == "hlle":
         return hlle_energy(V, F, **kwargs)

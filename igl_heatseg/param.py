@@ -141,8 +141,10 @@ class ChartParam:
         Image of every vertex of the input ``V`` (``NaN`` rows for vertices ``F`` does not use).
         Counter-clockwise image orientation when the map is bijective (mirror undone).
     method : str
-        What produced ``UV``: ``"hessian-hlle"``, ``"hessian-curved"``, ``"tutte"``,
-        ``"tutte+slim"``, ``"tutte+slim-fixed"``, ``"harmonic"``, ``"lscm"``, ``"arap"``.
+        What produced ``UV``: ``"hessian-hlle"``, ``"hessian-curved"`` (bijective Hessian map),
+        ``"hessian-hlle+repair"``, ``"hessian-curved+repair"`` (locally repaired),
+        ``"tutte"``, ``"tutte+slim"``, ``"tutte+slim-fixed"`` (fallbacks), or a baseline of
+        :func:`map_chart`: ``"harmonic"``, ``"lscm"``, ``"arap"``.
     bijective : bool
         Certificate verdict for ``UV``.
     flips, overlaps : int
@@ -159,7 +161,8 @@ class ChartParam:
     attempts : list of dict
         Every map tried, in order: method, bijective, flips, overlaps, seconds.
     fallback_used : bool
-        True when the requested Hessian map failed the certificate and a fallback was used.
+        True when the requested Hessian map failed the certificate (the chart's map is then a
+        repaired Hessian map or a Tutte-based fallback).
     """
 
     UV: np.ndarray
@@ -251,13 +254,16 @@ def _mass_diagonal(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     return m
 
 
-def _lowest_eigenpairs(K: sp.spmatrix, m: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+def _lowest_eigenpairs(
+    K: sp.spmatrix, m: np.ndarray, k: int, psd: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
     """Lowest ``k`` eigenpairs of ``K y = lambda diag(m) y`` (eigenvectors M-orthonormal).
 
     Dense ``eigh`` for small charts; otherwise shift-invert Lanczos (``eigsh``) around
     ``-EIGEN_SHIFT`` with one sparse LU of ``K + EIGEN_SHIFT M`` in symmetric mode (minimum
     degree ordering on ``A + A^T``: 3x less fill than the default column ordering on HLLE's
-    4-ring sparsity), LOBPCG if ARPACK fails.
+    4-ring sparsity), LOBPCG if ARPACK fails.  ``psd=False`` (a matrix that may be
+    indefinite, as libigl's curved Hessian on doubly curved charts) keeps partial pivoting.
     """
     n = K.shape[0]
     k = min(k, n)
@@ -266,8 +272,8 @@ def _lowest_eigenpairs(K: sp.spmatrix, m: np.ndarray, k: int) -> tuple[np.ndarra
         return lam[:k], Y[:, :k]
     M = sp.diags(m).tocsc()
     A = (K + EIGEN_SHIFT * M).tocsc()
-    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
+    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0 if psd else 1.0,
+                   options={"SymmetricMode": psd})
     OP = spla.LinearOperator((n, n), matvec=lu.solve, dtype=np.float64)
     try:
         lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP,
@@ -357,7 +363,7 @@ def hessian_map(
     else:
         raise MeshError(f"hessian_map: `energy` must be 'hlle' or 'curved', got {energy!r}")
     m = _mass_diagonal(V, F)
-    lam, Y = _lowest_eigenpairs(K, m, 3 + EXTRA_EIGENPAIRS)
+    lam, Y = _lowest_eigenpairs(K, m, 3 + EXTRA_EIGENPAIRS, psd=energy == "hlle")
     null = int(np.count_nonzero(lam <= NULLSPACE_TOL * max(np.abs(lam).max(), 1e-300)))
     keep = min(max(3, null), MAX_NULL_DIM + 1, n)
     Yk = Y[:, :keep]

@@ -173,9 +173,9 @@ class FastHeatSolver:
         Hops by which patch domains are grown (default :data:`HALO_HOPS`).
     patch_size : int
         Free vertices per patch (default :data:`PATCH_VERTICES`).
-    exact_work : float
-        Solve all groups exactly when ``k * n_free <= exact_work`` (default
-        :data:`EXACT_WORK`) or when groups are sparse (more than
+    exact_work : float, optional
+        Solve all groups exactly when ``k * n_free <= exact_work`` (default: the module's
+        :data:`EXACT_WORK` at construction time) or when groups are sparse (more than
         :data:`LOCAL_MAX_FREE_PER_GROUP` free vertices per group: long-range fields);
         ``float("inf")`` forces exact solves, ``0`` local ones.
     refine_halo : int
@@ -216,7 +216,7 @@ class FastHeatSolver:
         *,
         halo: int = HALO_HOPS,
         patch_size: int = PATCH_VERTICES,
-        exact_work: float = EXACT_WORK,
+        exact_work: float | None = None,
         refine_halo: int = REFINE_HOPS,
     ) -> None:
         self.V, self.F = V, F
@@ -236,7 +236,7 @@ class FastHeatSolver:
             )
         self.halo = int(halo)
         self.patch_size = int(patch_size)
-        self.exact_work = float(exact_work)
+        self.exact_work = float(EXACT_WORK if exact_work is None else exact_work)
         self.refine_halo = int(refine_halo)
         if L is None:
             L = igl.cotmatrix(V, F)

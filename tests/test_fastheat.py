@@ -160,3 +160,38 @@ def test_topk_helpers_against_sort():
 def test_seed_face_labels_majority_then_lowest_id():
     Gc = np.array([[3, 3, 1], [1, 5, 5], [4, 2, 9], [7, 7, 7], [2, 8, 2]])
     np.testing.assert_array_equal(_seed_face_labels(Gc), [3, 5, 2, 7, 2])
+
+
+def _segment(mesh, solver, monkeypatch):
+    import inspect
+
+    from igl_heatseg import segment as S
+
+    if "solver" in inspect.signature(S.segment_mesh).parameters:
+        return S.segment_mesh(mesh, solver=solver)
+    monkeypatch.setattr(S, "HeatSolver", FastHeatSolver if solver == "fast" else HeatSolver)
+    return S.segment_mesh(mesh)
+
+
+def test_segment_mesh_fast_equals_exact_on_noisy_fandisk(data_dir, monkeypatch):
+    from igl_heatseg.checks import validate_mesh
+    from igl_heatseg.io import load_mesh
+
+    path = data_dir / "fandisk.off"
+    if not path.exists():
+        pytest.skip("fandisk.off not in data/")
+    import igl_heatseg.fastheat as fh
+
+    m = load_mesh(path)
+    mesh = validate_mesh(_perturb(m.V, m.F, 0.05, 3), m.F)
+    exact = _segment(mesh, "exact", monkeypatch)
+    monkeypatch.setattr(fh, "EXACT_WORK", 0.0)  # small mesh: force the local mode
+    fast = _segment(mesh, "fast", monkeypatch)
+    assert exact.initial_groups > 300
+    assert fast._solvers[0].stats["mode"] == "local"
+    np.testing.assert_array_equal(fast.initial_labels, exact.initial_labels)
+    np.testing.assert_array_equal(fast.labels, exact.labels)
+    np.testing.assert_array_equal(fast.vertex_labels, exact.vertex_labels)
+    np.testing.assert_allclose(fast.segment_areas, exact.segment_areas)
+    # fields stay available (exact, from one global factorization)
+    np.testing.assert_allclose(fast.temperature(0), exact.temperature(0), atol=TEMP_TOL)

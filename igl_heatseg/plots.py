@@ -37,7 +37,7 @@ def _pyplot():
     """Import matplotlib.pyplot on the Agg backend (no display), or raise with the hint."""
     try:
         import matplotlib
-    except ImportError as exc:  # pragma: no cover - exercised only without matplotlib
+    except ImportError as exc:
         raise ImportError(f"igl_heatseg.plots needs matplotlib: {INSTALL_HINT}") from exc
     import matplotlib.pyplot as plt
 

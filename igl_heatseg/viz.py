@@ -147,7 +147,7 @@ def _polyscope():
     """Import polyscope or raise ImportError with the install hint."""
     try:
         import polyscope as ps
-    except ImportError as exc:  # pragma: no cover - exercised only without polyscope
+    except ImportError as exc:
         raise ImportError(
             f"igl_heatseg.viz needs polyscope, which is not installed: {INSTALL_HINT}"
         ) from exc

@@ -109,3 +109,11 @@ def test_area_plot_rank_axis_log_for_many_groups():
     few = plots.plot_area_distribution(np.geomspace(1, 1e-3, plots.LOG_RANK_ABOVE), 0.05)
     many = plots.plot_area_distribution(np.geomspace(1, 1e-3, plots.LOG_RANK_ABOVE + 1), 0.05)
     assert few.axes[0].get_xscale() == "linear" and many.axes[0].get_xscale() == "log"
+
+
+def test_missing_matplotlib_gives_install_hint(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    with pytest.raises(ImportError, match=r"pip install igl_heatseg\[viz\]"):
+        plots.plot_area_distribution([1.0, 0.5], 0.05)

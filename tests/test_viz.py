@@ -371,3 +371,9 @@ def test_headless_render_of_chart_stages(tmp_path):
     )
     for name in ("segmentation", "checker", "charts"):
         _check_picture(tmp_path / f"{name}.png", size)
+
+
+def test_missing_polyscope_gives_install_hint(monkeypatch):
+    monkeypatch.setitem(sys.modules, "polyscope", None)  # `import polyscope` now fails
+    with pytest.raises(ImportError, match=r"pip install igl_heatseg\[viz\]"):
+        viz.init_polyscope("openGL_mock")

@@ -788,9 +788,11 @@ def parameterize_chart(
     F : (m, 3) array_like of int
         Triangles of a topological disk (1 component, 1 boundary loop, chi = 1), consistently
         oriented.  Any size from one triangle up.
-    energy : {"hlle", "curved"}
-        Hessian energy: the paper's HLLE (:func:`~igl_heatseg.hessian.hlle_energy`) or libigl's
-        curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`).
+    energy : {"hlle", "curved", "auto"}
+        Hessian energy: the paper's HLLE (:func:`~igl_heatseg.hessian.hlle_energy`), libigl's
+        curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`), or ``"auto"``:
+        HLLE, and the curved Hessian when the HLLE map is not bijective (HLLE is the more
+        accurate on creased CAD charts, the curved Hessian the more robust on scans).
     fallback : {"tutte+slim", "tutte", "none"}
         What to do when the Hessian map is not bijective: a Tutte map (bijective by
         construction), optionally improved by SLIM keeping only certified-bijective iterates
@@ -831,8 +833,8 @@ def parameterize_chart(
     >>> res.method, res.bijective, round(res.distortion["sym_dirichlet"], 6)
     ('hessian-hlle', True, 4.0)
     """
-    if energy not in ("hlle", "curved"):
-        raise MeshError(f"{name}: `energy` must be 'hlle' or 'curved', got {energy!r}")
+    if energy not in ("hlle", "curved", "auto"):
+        raise MeshError(f"{name}: `energy` must be 'hlle', 'curved' or 'auto', got {energy!r}")
     if fallback not in ("tutte+slim", "tutte", "none"):
         raise MeshError(
             f"{name}: `fallback` must be 'tutte+slim', 'tutte' or 'none', got {fallback!r}"
@@ -841,25 +843,39 @@ def parameterize_chart(
     n_in = np.asarray(V).shape[0] if np.ndim(V) == 2 else 0
     Vn, Fc, used, scale, bnd = _prepare_chart(V, F, name)
     attempts = []
-    method = f"hessian-{energy}"
+    tries = []  # (UV, cert, method, eigenvalues) of every Hessian map computed
+    for en in ("hlle", "curved") if energy == "auto" else (energy,):
+        meth = f"hessian-{en}"
+        t = time.perf_counter()
+        try:
+            kw = energy_kwargs if en == "hlle" else {}
+            UVh, lam_h, null_dim = hessian_map(Vn, Fc, en, **kw)
+            ok = bool(np.all(np.isfinite(UVh)))
+        except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
+            if isinstance(exc, MeshError):
+                raise
+            log.warning("%s: %s eigen-solve failed: %s", name, meth, exc)
+            ok = False
+        if ok:
+            UVh, cert_h = _finish(UVh, Vn, Fc, name)
+            attempts.append({"method": meth, **cert_h.summary(), "null_dim": null_dim,
+                             "seconds": time.perf_counter() - t})
+            tries.append((UVh, cert_h, meth, lam_h))
+            if cert_h.bijective:
+                break
+        else:
+            attempts.append({"method": meth, "bijective": False, "error": "eigen-solve failed",
+                             "seconds": time.perf_counter() - t})
+    if tries:
+        # The bijective one, else the one that is easiest to repair (no overlaps, fewest
+        # local defects).
+        def badness(tr):
+            c = tr[1]
+            return (not c.bijective, c.overlaps > 0, c.flips + c.degenerate + c.wound)
 
-    t = time.perf_counter()
-    try:
-        UVc, lam, null_dim = hessian_map(Vn, Fc, energy, **energy_kwargs)
-        ok = bool(np.all(np.isfinite(UVc)))
-    except (RuntimeError, np.linalg.LinAlgError, ValueError) as exc:
-        if isinstance(exc, MeshError):
-            raise
-        log.warning("%s: %s eigen-solve failed: %s", name, method, exc)
-        UVc, lam, null_dim, ok = np.zeros((Vn.shape[0], 2)), None, 0, False
-    if ok:
-        UVc, cert = _finish(UVc, Vn, Fc, name)
-        attempts.append({"method": method, **cert.summary(), "null_dim": null_dim,
-                         "seconds": time.perf_counter() - t})
+        UVc, cert, method, lam = min(tries, key=badness)
     else:
-        cert = None
-        attempts.append({"method": method, "bijective": False, "error": "eigen-solve failed",
-                         "seconds": time.perf_counter() - t})
+        UVc, cert, method, lam = np.zeros((Vn.shape[0], 2)), None, f"hessian-{energy}", None
     used_fallback = False
     if (cert is None or not cert.bijective) and fallback != "none":
         used_fallback = True
@@ -926,7 +942,7 @@ def parameterize_chart(
         eigenvalues=lam,
         certificate=cert,
         attempts=attempts,
-        fallback_used=used_fallback,
+        fallback_used=method not in ("hessian-hlle", "hessian-curved"),
     )
 
 

@@ -190,6 +190,18 @@ def test_repair_untangles_a_local_fold():
     assert r0 == 0 and np.array_equal(same, V[:, :2])
 
 
+def test_auto_energy_tries_hlle_then_curved():
+    V, F = grid(6, 5, jitter=0.2)
+    res = parameterize_chart(V, F, "auto")
+    assert res.method == "hessian-hlle" and [a["method"] for a in res.attempts] == [
+        "hessian-hlle"
+    ]
+    V, F = sphere_cap(2.4)
+    res = parameterize_chart(V, F, "auto")
+    assert [a["method"] for a in res.attempts][:2] == ["hessian-hlle", "hessian-curved"]
+    assert res.bijective and res.fallback_used
+
+
 def test_tutte_is_bijective_on_bad_triangles():
     V, F = grid(10, 10, jitter=0.45, seed=3)
     V[:, 2] = np.sin(5 * V[:, 0]) * 0.5

@@ -15,7 +15,7 @@ Stages (:data:`STAGES`):
 ``initial``
     The initial over-segmentation, one categorical colour per initial group (Fig. 11).
 ``final``
-    The final segmentation (Fig. 13), sharp edges as thin curves.
+    The final segmentation (Fig. 13), segment boundaries as thin dark curves.
 ``checker``
     Every chart's UV map as a checkerboard on the 3D mesh, cut paths as curves (Fig. 15).
 ``charts``
@@ -28,8 +28,19 @@ backend comes from the argument, else the environment variable :data:`BACKEND_EN
 (``IGL_HEATSEG_PS_BACKEND``, e.g. ``openGL_mock`` for tests and notebooks), else polyscope's
 default (interactive) or :data:`HEADLESS_BACKEND` (rendering).
 
-Charts (the ``checker``/``charts`` stages) are taken from the parameterization stage; any
-object with the attributes listed in :func:`as_chart_maps` works.
+Charts (the ``checker``/``charts`` stages) are taken from the parameterization stage
+(:func:`igl_heatseg.pipeline.run_pipeline`); any object with the attributes listed in
+:func:`as_chart_maps` works.
+
+Examples
+--------
+Headless, from the command line or Python::
+
+    igl-heatseg render data/fandisk.off -o final.png --stage final --size 1200 900
+    igl-heatseg plot-areas data/fandisk.off -o areas.png
+
+    >>> from igl_heatseg import viz                                    # doctest: +SKIP
+    >>> viz.render("data/fandisk.off", "seeds.png", stage="seeds")     # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -97,7 +108,7 @@ HEADLESS_BACKEND: str = "openGL3_egl"
 BACKENDS: tuple[str, ...] = ("auto", "openGL3_glfw", "openGL3_egl", "openGL_mock")
 
 #: What to install when EGL is missing (Debian/Ubuntu).
-EGL_HINT: str = "apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri"
+EGL_HINT: str = "apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri libopengl0"
 
 #: Default picture size in pixels (width, height).
 DEFAULT_SIZE: tuple[int, int] = (1200, 900)
@@ -176,6 +187,8 @@ def init_polyscope(backend: str | None = None, *, headless: bool = False) -> Any
     ------
     ImportError
         polyscope is not installed.
+    ValueError
+        Unknown backend name (argument or :data:`BACKEND_ENV`); see :data:`BACKENDS`.
     RuntimeError
         polyscope could not initialise the backend (e.g. no EGL library).
 

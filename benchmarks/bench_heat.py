@@ -1,3 +1,4 @@
+# ruff: noqa: T201  (a benchmark script: it prints its results)
 """Heat-solve benchmark (issue 5): floor vs exact reference vs fast default, and scaling.
 
 Usage::
@@ -81,8 +82,11 @@ def floor_time(mesh) -> dict:
     A = sp.csr_matrix(-Lr[:, free])
     A.sort_indices()
     solver = cholespy.CholeskySolverD(
-        A.shape[0], A.indptr.astype(np.int32), A.indices.astype(np.int32),
-        np.ascontiguousarray(A.data), cholespy.MatrixType.CSR,
+        A.shape[0],
+        A.indptr.astype(np.int32),
+        A.indices.astype(np.int32),
+        np.ascontiguousarray(A.data),
+        cholespy.MatrixType.CSR,
     )
     t2 = time.perf_counter()
     b = np.ascontiguousarray(Lr[:, known] @ (group[known] == 0).astype(np.float64))
@@ -90,8 +94,12 @@ def floor_time(mesh) -> dict:
     solver.solve(b, x)
     t3 = time.perf_counter()
     return {
-        "cotmatrix_s": t1 - t0, "factor_s": t2 - t1, "solve_s": t3 - t2, "floor_s": t3 - t0,
-        "free": int(len(free)), "groups": int(k),
+        "cotmatrix_s": t1 - t0,
+        "factor_s": t2 - t1,
+        "solve_s": t3 - t2,
+        "floor_s": t3 - t0,
+        "free": int(len(free)),
+        "groups": int(k),
     }
 
 
@@ -107,8 +115,12 @@ def part1(path: Path, skip_exact: bool) -> dict:
     t = time.perf_counter()
     mesh = load_mesh(path)
     t_load = time.perf_counter() - t
-    out = {"mesh": str(path), "faces": int(mesh.F.shape[0]), "vertices": int(mesh.V.shape[0]),
-           "load_s": t_load}
+    out = {
+        "mesh": str(path),
+        "faces": int(mesh.F.shape[0]),
+        "vertices": int(mesh.V.shape[0]),
+        "load_s": t_load,
+    }
     out["floor"] = floor_time(mesh)
     t = time.perf_counter()
     fast = _segment(mesh, "fast")
@@ -141,9 +153,14 @@ def one_size(path: Path) -> dict:
     seg = _segment(mesh, "fast")
     t2 = time.perf_counter()
     return {
-        "mesh": path.name, "faces": int(mesh.F.shape[0]), "vertices": int(mesh.V.shape[0]),
-        "load_s": t1 - t0, "segment_s": t2 - t1, "total_s": t2 - t0,
-        "initial_groups": seg.initial_groups, "segments": seg.num_segments,
+        "mesh": path.name,
+        "faces": int(mesh.F.shape[0]),
+        "vertices": int(mesh.V.shape[0]),
+        "load_s": t1 - t0,
+        "segment_s": t2 - t1,
+        "total_s": t2 - t0,
+        "initial_groups": seg.initial_groups,
+        "segments": seg.num_segments,
         "timings": {k: round(v, 3) for k, v in seg.timings.items()},
         "peak_rss_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20,
     }
@@ -186,8 +203,10 @@ def machine() -> str:
     import os
 
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
-    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-            f"load average {load[0]:.1f} at start")
+    return (
+        f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+        f"load average {load[0]:.1f} at start"
+    )
 
 
 def main(argv=None) -> int:
@@ -209,17 +228,25 @@ def main(argv=None) -> int:
         r = part1(args.mesh, args.skip_exact)
         fl = r["floor"]["floor_s"]
         print(json.dumps(r, default=float), flush=True)
-        print(f"\n{Path(r['mesh']).name}: {r['faces']} faces, {r['initial_groups']} initial groups, "
-              f"{r['segments']} segments")
+        print(
+            f"\n{Path(r['mesh']).name}: {r['faces']} faces, "
+            f"{r['initial_groups']} initial groups, {r['segments']} segments"
+        )
         print(f"floor (cotmatrix + CHOLMOD factor + 1 solve): {fl:.2f} s")
-        print(f"fast segment_mesh: {r['fast_s']:.2f} s = {r['fast_s'] / fl:.1f} x floor "
-              f"(load {r['load_s']:.2f} s more)")
+        print(
+            f"fast segment_mesh: {r['fast_s']:.2f} s = {r['fast_s'] / fl:.1f} x floor "
+            f"(load {r['load_s']:.2f} s more)"
+        )
         if "exact_s" in r:
-            print(f"exact segment_mesh: {r['exact_s']:.2f} s; fast/exact = "
-                  f"{r['fast_s'] / r['exact_s']:.3f} (speed-up {r['exact_s'] / r['fast_s']:.1f} x)")
-            print(f"label agreement (area-weighted): final {100 * r['agreement_final']:.4f} %, "
-                  f"initial {100 * r['agreement_initial']:.4f} %; "
-                  f"{r['faces_differing_final']} faces differ")
+            print(
+                f"exact segment_mesh: {r['exact_s']:.2f} s; fast/exact = "
+                f"{r['fast_s'] / r['exact_s']:.3f} (speed-up {r['exact_s'] / r['fast_s']:.1f} x)"
+            )
+            print(
+                f"label agreement (area-weighted): final {100 * r['agreement_final']:.4f} %, "
+                f"initial {100 * r['agreement_initial']:.4f} %; "
+                f"{r['faces_differing_final']} faces differ"
+            )
     if args.scaling or args.scaling_only:
         with tempfile.TemporaryDirectory() as tmp:
             wd = args.workdir or Path(tmp)
@@ -231,8 +258,10 @@ def main(argv=None) -> int:
             if "error" in x:
                 print(f"| {x['mesh']} | error: {x['error']} |")
                 continue
-            print(f"| {x['mesh']} | {x['faces']} | {x['initial_groups']} -> {x['segments']} | "
-                  f"{x['load_s']:.2f} | {x['segment_s']:.2f} | {x['peak_rss_gb']:.2f} |")
+            print(
+                f"| {x['mesh']} | {x['faces']} | {x['initial_groups']} -> {x['segments']} | "
+                f"{x['load_s']:.2f} | {x['segment_s']:.2f} | {x['peak_rss_gb']:.2f} |"
+            )
     return 0
 
 

@@ -1,3 +1,4 @@
+# ruff: noqa: T201  (a benchmark script: it prints its results)
 """Noisy test meshes of chosen size from iron.ply (not committed; written to a temp dir).
 
 ``make_noisy(m0, levels)``: iron.ply decimated to ``m0`` faces (libigl edge collapse), Loop-

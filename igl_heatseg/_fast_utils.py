@@ -4,10 +4,10 @@
 a generic comparison function: on the 1M-face benchmark mesh ``validate_mesh`` spent most of
 its time in three such calls (vertex dedup, unique edges, corner/fan pairs) and
 ``edge_topology`` in one.  Here rows of two non-negative integers are packed into one int64
-key and argsorted (numpy's vectorized integer sort; 1-D ``np.unique`` would hash, slower
-here), and other rows are ordered with ``np.lexsort`` on their columns.  Results are identical to ``np.unique(A, axis=0, ...)`` (tested in
-``tests/test_fast_utils.py``); for float rows equal up to the sign of zero, which compares
-equal either way.
+key and argsorted (numpy's vectorized integer sort; 1-D ``np.unique`` would hash,
+slower here), and other rows are ordered with ``np.lexsort`` on their columns.  Results
+are identical to ``np.unique(A, axis=0, ...)`` (tested in ``tests/test_fast_utils.py``);
+for float rows equal up to the sign of zero, which compares equal either way.
 """
 
 from __future__ import annotations
@@ -17,9 +17,7 @@ import numpy as np
 __all__ = ["unique_rows", "edge_topology"]
 
 
-def unique_rows(
-    A: np.ndarray, return_inverse: bool = False, return_counts: bool = False
-):
+def unique_rows(A: np.ndarray, return_inverse: bool = False, return_counts: bool = False):
     """Unique rows of a 2-D array, sorted lexicographically: ``np.unique(A, axis=0, ...)``.
 
     Parameters

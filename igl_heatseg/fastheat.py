@@ -52,7 +52,6 @@ from collections.abc import Callable, Sequence
 import igl
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from .constants import HEAT_SUM_TOL
 from .heat import HeatLabels
@@ -152,8 +151,11 @@ class _Factor:
         else:
             self._igl = igl.min_quad_with_fixed_data()
             igl.min_quad_with_fixed_precompute(
-                sp.csc_matrix(A), np.zeros(0, dtype=np.int64), sp.csc_matrix((0, self.n)),
-                True, self._igl,
+                sp.csc_matrix(A),
+                np.zeros(0, dtype=np.int64),
+                sp.csc_matrix((0, self.n)),
+                True,
+                self._igl,
             )
 
     def solve(self, B: np.ndarray) -> np.ndarray:
@@ -402,9 +404,7 @@ class FastHeatSolver:
         patch[order] = np.arange(nf) * npatch // nf
         # Owner of each group: the patch holding most free neighbours of its seeds.
         Bc = B.tocoo()
-        pair = sp.coo_matrix(
-            (np.ones(Bc.nnz), (Bc.col, patch[Bc.row])), shape=(k, npatch)
-        ).tocsr()
+        pair = sp.coo_matrix((np.ones(Bc.nnz), (Bc.col, patch[Bc.row])), shape=(k, npatch)).tocsr()
         owner = np.asarray(pair.argmax(axis=1)).ravel()
         owner[np.diff(pair.indptr) == 0] = -1  # group with no free neighbour
         # 2. Domains: (nf, npatch) pattern grown by `halo` hops through free vertices.
@@ -505,13 +505,20 @@ class FastHeatSolver:
             val[dup] = -np.inf
             rest = (txz[lc[:, 0]] + txz[lc[:, 1]] + txz[lc[:, 2]]) / 3.0
             fv, fi, fx = _topk_rows(val, K)
-            _merge_topk(fval, fid, fexc, faces, fv, gids[np.take_along_axis(cz, fi, 1)],
-                        np.maximum(fx, rest))
+            _merge_topk(
+                fval,
+                fid,
+                fexc,
+                faces,
+                fv,
+                gids[np.take_along_axis(cz, fi, 1)],
+                np.maximum(fx, rest),
+            )
             tsub[4] += time.perf_counter() - t5
             if progress is not None:
                 progress(0.9 * (c + 1) / npatch)
         st["patch_solves_s"] = time.perf_counter() - t
-        for name, val in zip(("slice", "factor", "solve", "vertices", "faces"), tsub):
+        for name, val in zip(("slice", "factor", "solve", "vertices", "faces"), tsub, strict=True):
             st[f"patch_{name}_s"] = val
         if len(ownerless):
             log.debug("%d groups touch no free vertex", len(ownerless))
@@ -560,7 +567,14 @@ class FastHeatSolver:
         pv_i, pv_j = np.nonzero(cand_v & iv[:, None])
         pf_i, pf_j = np.nonzero(cand_f & jf[:, None])
         ok_v, lab_v, max_v, ok_f, lab_f = self._refine(
-            uv, vid[uv][pv_i, pv_j], pv_i, uf, fid[uf][pf_i, pf_j], pf_i, owner, fc,
+            uv,
+            vid[uv][pv_i, pv_j],
+            pv_i,
+            uf,
+            fid[uf][pf_i, pf_j],
+            pf_i,
+            owner,
+            fc,
             np.maximum(np.where(cand_v, -np.inf, vval[uv]).max(axis=1), vexc[uv]) + slack_v[uv],
             np.maximum(np.where(cand_f, -np.inf, fval[uf]).max(axis=1), fexc[uf]) + slack_f[uf],
         )
@@ -619,7 +633,13 @@ class FastHeatSolver:
         log.info(
             "local heat labels: %d patches, %d domain vertices, %d/%d vertices and %d/%d faces "
             "uncertified, %d groups solved exactly",
-            npatch, X.nnz, len(uv), nf, len(uf), m, len(cands),
+            npatch,
+            X.nnz,
+            len(uv),
+            nf,
+            len(uf),
+            m,
+            len(cands),
         )
         return HeatLabels(
             vertex_labels=vertex_labels,
@@ -656,7 +676,7 @@ class FastHeatSolver:
             Bc = B[:, np.r_[gv, gf]].tocoo()
             fcor = fc[uf[jf]]  # (len(gf), 3)
             src_r = np.r_[uv[iv], fcor.ravel(), Bc.row]
-            src_c = np.r_[cidx[: len(gv)], np.repeat(cidx[len(gv):], 3), cidx[Bc.col]]
+            src_c = np.r_[cidx[: len(gv)], np.repeat(cidx[len(gv) :], 3), cidx[Bc.col]]
             keep = src_r >= 0
             X = sp.csr_matrix(
                 (np.ones(int(keep.sum()), dtype=np.int8), (src_r[keep], src_c[keep])),
@@ -676,7 +696,7 @@ class FastHeatSolver:
             for ci in range(len(patches)):
                 D = X.indices[X.indptr[ci] : X.indptr[ci + 1]]
                 sv = np.flatnonzero(cidx[: len(gv)] == ci)
-                sf = np.flatnonzero(cidx[len(gv):] == ci)
+                sf = np.flatnonzero(cidx[len(gv) :] == ci)
                 gids = np.unique(np.r_[gv[sv], gf[sf]])
                 ADD = A[D][:, D]
                 bh = -(Arow[D] - ADD @ np.ones(len(D)))  # L_D,out 1 (>= 0 for cot weights)
@@ -713,7 +733,10 @@ class FastHeatSolver:
         res = np.unique(np.concatenate(out)) if out else np.zeros(0, dtype=np.int64)
         log.warning(
             "%d vertices/faces have rivals outside their %d kept candidates; solving %d groups "
-            "exactly", len(fv) + len(ff), TOPK, len(res),
+            "exactly",
+            len(fv) + len(ff),
+            TOPK,
+            len(res),
         )
         return res
 
@@ -801,8 +824,13 @@ def _topk_rows(M: np.ndarray, K: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _merge_topk(
-    val: np.ndarray, ids: np.ndarray, exc: np.ndarray, rows: np.ndarray, bv: np.ndarray,
-    bi: np.ndarray, bx: np.ndarray,
+    val: np.ndarray,
+    ids: np.ndarray,
+    exc: np.ndarray,
+    rows: np.ndarray,
+    bv: np.ndarray,
+    bi: np.ndarray,
+    bx: np.ndarray,
 ) -> None:
     """Fold a block's top-K lower bounds into running top-K lists.
 

@@ -1,10 +1,10 @@
 """FastHeatSolver (local certified solves) against the exact HeatSolver reference."""
 
+import igl
 import numpy as np
 import pytest
 from meshes import cube, cylinder, grid, sphere
 
-import igl
 from igl_heatseg.fastheat import FastHeatSolver, _merge_topk, _seed_face_labels, _topk_rows
 from igl_heatseg.heat import HeatSolver
 from igl_heatseg.seeds import seed_groups, seed_mask

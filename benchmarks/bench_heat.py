@@ -23,8 +23,7 @@ area-weighted share of faces with identical final labels (and of identical initi
 Part 2 (``--scaling``): noisy remeshed irons of about 50k, 200k and 1M faces
 (``benchmarks/make_meshes.py``, written to a temporary directory, never committed), each
 segmented with the fast solver in a fresh subprocess that reports wall times and its peak
-resident memory (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, which counts C allocations,
-unlike tracemalloc).
+resident memory (``VmHWM``; see :func:`peak_rss_gb`).
 """
 
 from __future__ import annotations
@@ -141,10 +140,26 @@ def part1(path: Path, skip_exact: bool) -> dict:
     return out
 
 
-def one_size(path: Path) -> dict:
-    """Run in a subprocess: load + fast segmentation; times and peak RSS."""
+def peak_rss_gb() -> float:
+    """Peak resident memory of this process in GiB.
+
+    ``VmHWM`` from ``/proc/self/status`` (reset by ``exec``, so a fresh subprocess reports its
+    own peak); else ``getrusage(RUSAGE_SELF).ru_maxrss``, which Linux carries across
+    ``exec`` from the forking parent.  Both count C allocations, unlike tracemalloc.
+    """
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 2**20  # kB -> GiB
+    except OSError:
+        pass
     import resource
 
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+
+
+def one_size(path: Path) -> dict:
+    """Run in a subprocess: load + fast segmentation; times and peak memory."""
     from igl_heatseg.io import load_mesh
 
     t0 = time.perf_counter()
@@ -162,7 +177,7 @@ def one_size(path: Path) -> dict:
         "initial_groups": seg.initial_groups,
         "segments": seg.num_segments,
         "timings": {k: round(v, 3) for k, v in seg.timings.items()},
-        "peak_rss_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20,
+        "peak_rss_gb": peak_rss_gb(),
     }
 
 

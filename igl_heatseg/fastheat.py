@@ -365,27 +365,70 @@ class FastHeatSolver:
         return hl
 
     def _labels_exact(self, progress) -> HeatLabels:
+        """All fields solved exactly, in batches, folded into a running argmax.
+
+        Seeds are labelled by their group (value exactly 1, all others 0).  A face is only
+        re-evaluated for a batch if some corner's batch maximum beats the face's best mean
+        so far (a mean never exceeds the largest corner value), so after the first batches
+        each batch touches few faces: no ``m x batch`` work per batch.
+        """
         self.stats["mode"] = "exact"
-        n, F = self.n, self.F
+        n, F, nf, k = self.n, self.F, self.nf, self.k
+        group, free, known, fidx = self.group, self.free, self.known, self._fidx
         m = F.shape[0]
-        batch = int(np.clip(_BATCH_BYTES // (8 * (2 * n + m)), 1, _SOLVE_BATCH))
-        vmax = np.full(n, -np.inf)
-        varg = np.zeros(n, dtype=np.int64)
-        fmax = np.full(m, -np.inf)
+        vval = np.full(nf, -np.inf)
+        varg = np.zeros(nf, dtype=np.int64)
+        usum = np.zeros(nf)
+        fc = fidx[F]
+        has_free = (fc >= 0).any(axis=1)
         farg = np.zeros(m, dtype=np.int64)
-        usum = np.zeros(n)
-        for g0 in range(0, self.k, batch):
-            g1 = min(self.k, g0 + batch)
-            U = self.temperatures(np.arange(g0, g1), nrhs=self.k)
-            usum += U.sum(axis=1)
-            _argmax_update(U, g0, vmax, varg)
-            Uf = (U[F[:, 0]] + U[F[:, 1]] + U[F[:, 2]]) / 3.0
-            _argmax_update(Uf, g0, fmax, farg)
+        allseed = np.flatnonzero(~has_free)
+        if len(allseed):  # exact: corner counts / 3, ties to the lowest id
+            farg[allseed] = _seed_face_labels(group[F[allseed]])
+        Fh = F[has_free]
+        hf = np.flatnonzero(has_free)
+        fmax_h = np.full(len(hf), -np.inf)
+        farg_h = np.zeros(len(hf), dtype=np.int64)
+        vm = np.zeros(n)
+        for g0 in range(0, k, _SOLVE_BATCH):
+            g1 = min(k, g0 + _SOLVE_BATCH)
+            gs = np.arange(g0, g1)
+            X = self._free_fields(gs, k)  # (nf, b)
+            usum += X.sum(axis=1)
+            _argmax_update(X, g0, vval, varg)
+            vm[free] = X.max(axis=1)
+            vm[known] = ((group[known] >= g0) & (group[known] < g1)).astype(np.float64)
+            cmax = np.maximum(np.maximum(vm[Fh[:, 0]], vm[Fh[:, 1]]), vm[Fh[:, 2]])
+            sel = np.flatnonzero(cmax > fmax_h)
+            if len(sel):
+                Fs = Fh[sel]
+                corner = []
+                for j in range(3):
+                    c = Fs[:, j]
+                    cf = fidx[c]
+                    Uc = np.zeros((len(sel), g1 - g0))
+                    Uc[cf >= 0] = X[cf[cf >= 0]]
+                    sc = np.flatnonzero(cf < 0)
+                    Uc[sc] = (group[c[sc]][:, None] == gs[None, :]).astype(np.float64)
+                    corner.append(Uc)
+                Uf = (corner[0] + corner[1] + corner[2]) / 3.0
+                best = fmax_h[sel]
+                arg = farg_h[sel]
+                _argmax_update(Uf, g0, best, arg)
+                fmax_h[sel] = best
+                farg_h[sel] = arg
             if progress is not None:
-                progress(g1 / self.k)
-        err = float(np.abs(usum - 1.0).max()) if n else 0.0
-        self.stats["fallback_groups"] = self.k
-        return HeatLabels(vertex_labels=varg, face_labels=farg, vertex_max=vmax, sum_error=err)
+                progress(g1 / k)
+        farg[hf] = farg_h
+        vertex_labels = group.copy()
+        vertex_labels[free] = varg
+        vertex_max = np.ones(n)
+        vertex_max[free] = vval
+        err = float(np.abs(usum - 1.0).max()) if nf else 0.0
+        self.stats["fallback_groups"] = k
+        return HeatLabels(
+            vertex_labels=vertex_labels, face_labels=farg, vertex_max=vertex_max, sum_error=err
+        )
 
     def _labels_local(self, progress) -> HeatLabels:
         st = self.stats

@@ -66,6 +66,7 @@ __all__ = [
     "denoise_vertices",
     "curvature_classes",
     "split_along_creases",
+    "merge_by_primitives",
     "fit_plane",
     "fit_sphere",
     "fit_cylinder",
@@ -121,6 +122,20 @@ CREASE_DILATION: int = 0
 #: Primitive type: a simpler fit is chosen when its RMS distance is within this many mean edge
 #: lengths of the best fit's.
 PRIMITIVE_TOL: float = 0.05
+
+#: Adjacent segments merge when one primitive fits their union within this many mean edge
+#: lengths (RMS) ...
+MERGE_TOL: float = 0.1
+
+#: ... plus this many times the input's median dihedral deviation (radians; a noise estimate:
+#: normal noise of sigma = 0.1 mean edge lengths gives a median of about 0.17) ...
+MERGE_NOISE: float = 1.2
+
+#: ... or within this factor of the worse of the two pieces' own fits (noise level).
+MERGE_RATIO: float = 1.3
+
+#: Additive slack of the relative test, as a fraction of the absolute tolerance.
+MERGE_SLACK: float = 0.1
 
 #: Fewer points than this cannot be typed (``"Other"``).
 _MIN_FIT_POINTS = 8
@@ -454,6 +469,111 @@ def primitive_type(P: np.ndarray, N: np.ndarray, h: float, diag: float) -> tuple
     return "Other", float(best)
 
 
+def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float) -> np.ndarray | None:
+    """Point residuals of the best of the plane, cylinder and sphere fits (None if too few)."""
+    if len(P) < _MIN_FIT_POINTS:
+        return None
+    _, c, nrm = fit_plane(P)
+    cands = [(P - c) @ nrm]
+    rc = fit_cylinder(P, N)
+    if rc[3] < 10 * diag:
+        X = P - rc[1]
+        radial = X - np.outer(X @ rc[2], rc[2])
+        cands.append(np.linalg.norm(radial, axis=1) - rc[3])
+    rs = fit_sphere(P)
+    if rs[2] < 10 * diag:
+        cands.append(np.linalg.norm(P - rs[1], axis=1) - rs[2])
+    return min(cands, key=lambda r: float((r * r).mean()))
+
+
+def merge_by_primitives(
+    V: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    tol: float,
+    ratio: float = MERGE_RATIO,
+    topo=None,
+) -> tuple[np.ndarray, int]:
+    """Greedily merge adjacent segments whose union one plane, cylinder or sphere fits.
+
+    The union's best fit is judged on each piece separately (so a big plane cannot swallow a
+    small curved piece whose points it misses, which a single RMS over the union allows): the
+    worse of the two pieces' RMS distances to the union's fit must be at most ``tol`` and at
+    most ``ratio * max(rms_a, rms_b) + MERGE_SLACK * tol`` (the pieces' own fits: the noise
+    level).  The pair with the smallest such RMS goes first; fits are recomputed after every
+    merge.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Face labels ``0..k-1``.
+    tol : float
+        Absolute RMS tolerance (model units).
+    ratio : float
+        Relative tolerance against the two pieces' own fits (noise level).
+    topo : EdgeTopology, optional
+
+    Returns
+    -------
+    labels : (m,) int64
+        Merged labels (ids of the surviving segments, not renumbered).
+    merged : int
+        Number of merges.
+    """
+    topo = edge_topology(F) if topo is None else topo
+    N, _ = _unit_normals(V, F)
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    labels = labels.copy()
+    faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
+
+    def fit(fs):
+        res = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
+        return math.inf if res is None else float(np.sqrt((res * res).mean()))
+
+    def union_fit(fa, fb):
+        """RMS of the union's best fit over the points of each piece (the worse one)."""
+        va, vb = np.unique(F[fa]), np.unique(F[fb])
+        vs = np.union1d(va, vb)
+        res = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
+        if res is None:
+            return math.inf
+        ra, rb = res[np.searchsorted(vs, va)], res[np.searchsorted(vs, vb)]
+        return float(max(np.sqrt((ra * ra).mean()), np.sqrt((rb * rb).mean())))
+
+    rms = {s: fit(fs) for s, fs in faces.items()}
+    inner = topo.interior
+    ef = topo.EF[inner]
+
+    def neighbours():
+        la, lb = labels[ef[:, 0]], labels[ef[:, 1]]
+        d = la != lb
+        return {(int(min(a, b)), int(max(a, b))) for a, b in zip(la[d], lb[d], strict=True)}
+
+    slack = MERGE_SLACK * tol
+    cache: dict[tuple[int, int], float] = {}
+    merged = 0
+    while True:
+        best, pair = math.inf, None
+        for a, b in neighbours():
+            if (a, b) not in cache:
+                cache[(a, b)] = union_fit(faces[a], faces[b])
+            r = cache[(a, b)]
+            ok = r <= tol and (ratio <= 0 or r <= ratio * max(rms[a], rms[b]) + slack)
+            if ok and r < best:
+                best, pair = r, (a, b)
+        if pair is None:
+            return labels, merged
+        a, b = pair
+        faces[a] = np.concatenate([faces[a], faces.pop(b)])
+        labels[faces[a]] = a
+        rms[a] = fit(faces[a])
+        rms.pop(b)
+        cache = {k: v for k, v in cache.items() if a not in k and b not in k}
+        merged += 1
+
+
 # --------------------------------------------------------------------------------------------
 # The robust segmentation
 # --------------------------------------------------------------------------------------------
@@ -519,6 +639,7 @@ def segment_robust(
     flat_normal_angle: float = FLAT_NORMAL_ANGLE,
     crease_dilation: int = CREASE_DILATION,
     curvature_ring: int = CURVATURE_RING,
+    merge: bool = True,
 ) -> RobustSegmentation:
     """Segment a validated mesh in robust mode (see the module docstring).
 
@@ -543,6 +664,8 @@ def segment_robust(
         Rings around creases without seeds.
     curvature_ring : int
         Rings of the curvature fit.
+    merge : bool
+        Merge adjacent segments that one primitive fits (:func:`merge_by_primitives`).
 
     Returns
     -------
@@ -569,9 +692,9 @@ def segment_robust(
     h = _mean_edge_length(V, E)
 
     t = time.perf_counter()
+    raw_phi = _dihedral(V, F, topo)
+    noise_angle = float(np.median(raw_phi[topo.interior])) if topo.interior.any() else 0.0
     if denoise is None:
-        raw_phi = _dihedral(V, F, topo)
-        noise_angle = float(np.median(raw_phi[topo.interior])) if topo.interior.any() else 0.0
         denoise = noise_angle > NOISE_FREE_ANGLE
         log.info("robust: median dihedral deviation %.2f deg", math.degrees(noise_angle))
     if denoise:
@@ -657,6 +780,12 @@ def segment_robust(
     timings["heat_final"] = time.perf_counter() - t
 
     k1 = len(kept)
+    merged_primitives = 0
+    if merge:
+        t = time.perf_counter()
+        tol = (MERGE_TOL + MERGE_NOISE * noise_angle) * h
+        labels1, merged_primitives = merge_by_primitives(W, F, labels1, tol, topo=topo)
+        timings["merge"] = time.perf_counter() - t
     area = face_areas(V, F)
     areas1 = np.bincount(labels1, weights=area, minlength=k1)
     nonempty = np.flatnonzero(np.bincount(labels1, minlength=k1) > 0)

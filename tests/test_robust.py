@@ -197,3 +197,28 @@ def test_split_along_creases_separates_cube_sides():
     # nothing sharp: nothing split
     F3, orig3 = split_along_creases(F, np.zeros(len(topo.E), dtype=bool), topo)
     assert len(orig3) == len(V) and np.array_equal(orig3[F3], F)
+
+
+def test_merge_by_primitives_joins_pieces_of_one_surface_only():
+    from igl_heatseg.robust import merge_by_primitives
+
+    V, F, side = fine_box(3)
+    C = V[F].mean(axis=1)
+    labels = side.copy()
+    labels[(side == 0) & (C[:, 1] < 0.5)] = 6  # split one side (x = 0) in two
+    merged, count = merge_by_primitives(V, F, labels, tol=1e-3)
+    assert count == 1
+    assert purity(merged, side) == 1.0 and coverage(merged, side) == 1.0
+    # sides at right angles never merge, however loose the relative test
+    merged, count = merge_by_primitives(V, F, side, tol=1e-3, ratio=100.0)
+    assert count == 0
+    # open cylinder cut into 4 arcs: merged back into one
+    t, z = np.meshgrid(np.linspace(0, 2 * np.pi, 48, endpoint=False), np.linspace(0, 2, 16))
+    P = np.stack([np.cos(t).ravel(), np.sin(t).ravel(), z.ravel()], 1)
+    i = np.arange(48 * 16).reshape(16, 48)
+    a, b = i[:-1].ravel(), np.roll(i, -1, axis=1)[:-1].ravel()
+    Fc = np.concatenate([np.stack([a, b, b + 48], 1), np.stack([a, b + 48, a + 48], 1)])
+    ang = np.arctan2(*P[Fc].mean(axis=1)[:, 1::-1].T)
+    arcs = ((ang + np.pi) // (np.pi / 2)).astype(int) % 4
+    merged, count = merge_by_primitives(P, Fc, arcs, tol=0.01)
+    assert count == 3 and len(np.unique(merged)) == 1

@@ -535,9 +535,11 @@ def register(subparsers) -> None:
         "them (the ends of a generatrix, paper §3.5); repeatable",
     )
     p.add_argument(
-        "--pictures",
-        action="store_true",
-        help="also render segmentation.png and checker.png (needs the `viz` extra and OpenGL)",
+        "--no-pictures",
+        dest="pictures",
+        action="store_false",
+        help="do not render segmentation.png and checker.png (rendered by default when the "
+        "`viz` extra and an OpenGL/EGL library are available; skipped with a warning otherwise)",
     )
     p.add_argument(
         "--progress",

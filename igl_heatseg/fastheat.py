@@ -67,26 +67,36 @@ __all__ = [
     "CERT_ABS",
     "REFINE_HOPS",
     "LOCAL_MAX_FREE_PER_GROUP",
+    "HALO_HOPS_MAX",
+    "PATCH_VERTICES_MAX",
 ]
 
 log = logging.getLogger(__name__)
 
 #: Edge hops by which a patch's domain extends past its vertices and its groups' seeds.
 #: Fields of one-vertex groups on iron.ply fall by about 2x per hop (measured), so 10 hops
-#: leave about 1e-3 of the heat at the domain boundary.
+#: leave about 1e-3 of the heat at the domain boundary.  This is the minimum; sparser
+#: groups get more (:func:`_local_params`).
 HALO_HOPS: int = 10
 
-#: Free vertices per patch.
+#: Largest halo chosen automatically.
+HALO_HOPS_MAX: int = 30
+
+#: Free vertices per patch (minimum; sparser groups get larger patches).
 PATCH_VERTICES: int = 2000
+
+#: Largest patch chosen automatically.
+PATCH_VERTICES_MAX: int = 16000
 
 #: Use exact global solves when ``k * n_free`` is at most this (few groups).
 EXACT_WORK: float = 2.0e7
 
-#: Groups this sparse (free vertices per group) reach far: local domains would not certify,
-#: so solve exactly.  Measured: first rounds on scans have 10-13 free vertices per group
-#: (90 % of free vertices within 2-3 hops of a seed), second rounds 150 or more (6 hops);
-#: forcing local solves on the noisy 200k mesh's second round left 16k vertices uncertified.
-LOCAL_MAX_FREE_PER_GROUP: float = 50.0
+#: Groups this sparse (free vertices per group) reach too far for local domains: solve
+#: exactly.  Measured: first rounds on scans have 10-13 free vertices per group (90 % of
+#: free vertices within 2-3 hops of a seed), second rounds 150 or more (6 hops).  On the
+#: noisy 200k mesh's second round (150 per group) halo 10 / patch 2000 left 16k vertices
+#: uncertified; halo 30 / patch 8000 left 37 vertices for the exact fallback.
+LOCAL_MAX_FREE_PER_GROUP: float = 2000.0
 
 #: Candidates (lower bounds) kept per vertex and per face.
 TOPK: int = 4
@@ -191,10 +201,11 @@ class FastHeatSolver:
         component must hold a seed.
     L : (n, n) sparse, optional
         Cotangent Laplacian as from ``igl.cotmatrix`` (negative semidefinite).
-    halo : int
-        Hops by which patch domains are grown (default :data:`HALO_HOPS`).
-    patch_size : int
-        Free vertices per patch (default :data:`PATCH_VERTICES`).
+    halo : int, optional
+        Hops by which patch domains are grown.  Default: from the free vertices per group
+        ``r = n_free / k``, ``clip(2.5 sqrt(r), HALO_HOPS, HALO_HOPS_MAX)``.
+    patch_size : int, optional
+        Free vertices per patch.  Default ``clip(50 r, PATCH_VERTICES, PATCH_VERTICES_MAX)``.
     exact_work : float, optional
         Solve all groups exactly when ``k * n_free <= exact_work`` (default: the module's
         :data:`EXACT_WORK` at construction time) or when groups are sparse (more than
@@ -236,8 +247,8 @@ class FastHeatSolver:
         group: np.ndarray,
         L: sp.spmatrix | None = None,
         *,
-        halo: int = HALO_HOPS,
-        patch_size: int = PATCH_VERTICES,
+        halo: int | None = None,
+        patch_size: int | None = None,
         exact_work: float | None = None,
         refine_halo: int = REFINE_HOPS,
     ) -> None:
@@ -256,8 +267,10 @@ class FastHeatSolver:
                 f"vertex {int(np.flatnonzero(comp == bad[0])[0])}); their heat problem is "
                 "singular"
             )
-        self.halo = int(halo)
-        self.patch_size = int(patch_size)
+        r = (self.n - len(self.known)) / max(self.k, 1)
+        ah, ap = _local_params(r)
+        self.halo = ah if halo is None else int(halo)
+        self.patch_size = ap if patch_size is None else int(patch_size)
         self.exact_work = float(EXACT_WORK if exact_work is None else exact_work)
         self.refine_halo = int(refine_halo)
         if L is None:
@@ -786,6 +799,17 @@ class FastHeatSolver:
 
 # ------------------------------------------------------------------------------------------
 # helpers
+
+
+def _local_params(r: float) -> tuple[int, int]:
+    """Halo (hops) and patch size (free vertices) for ``r`` free vertices per group.
+
+    Sparser groups have longer-range fields: the halo grows like the typical distance
+    between seeds (``sqrt(r)``) and the patch so that it owns about 50 groups or more.
+    """
+    halo = int(np.clip(round(2.5 * np.sqrt(max(r, 0.0))), HALO_HOPS, HALO_HOPS_MAX))
+    patch = int(np.clip(50 * r, PATCH_VERTICES, PATCH_VERTICES_MAX))
+    return halo, patch
 
 
 def _decide(a, item, gid, lo, hi, rival):

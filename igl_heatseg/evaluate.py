@@ -785,10 +785,14 @@ def _run(args) -> int:
             if pred_path.is_dir():
                 pred_path = pred_path / "labels.txt"
             pred = read_labels(pred_path, m)
+        elif args.mode == "robust":
+            from .robust import segment_robust
+
+            pred = segment_robust(mesh).labels
         else:
             from .segment import segment_mesh
 
-            pred = segment_mesh(mesh).labels
+            pred = segment_mesh(mesh, keep_solvers=False).labels
         ev = evaluate_labels(mesh.V, mesh.F, pred, truths, weighting=args.weighting)
     except MeshError as exc:
         sys.stderr.write(f"igl-heatseg evaluate: error: {exc}\n")
@@ -804,7 +808,7 @@ def _run(args) -> int:
 
 
 def register(subparsers) -> None:
-    """Add ``igl-heatseg evaluate MESH --truth LABELS_OR_DIR [--pred DIR]``.
+    """Add ``igl-heatseg evaluate MESH --truth LABELS_OR_DIR [--pred DIR] [--mode robust]``.
 
     Parameters
     ----------
@@ -831,6 +835,12 @@ def register(subparsers) -> None:
         default=None,
         help="directory holding labels.txt written by `igl-heatseg segment` (or the labels "
         "file itself); default: segment the mesh with the paper's defaults",
+    )
+    p.add_argument(
+        "--mode",
+        choices=("paper", "robust"),
+        default="paper",
+        help="without --pred: segment with the paper's mode (default) or robust mode",
     )
     p.add_argument(
         "--weighting",

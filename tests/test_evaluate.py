@@ -286,3 +286,41 @@ def test_cli_with_pred_dir(tmp_path, capsys):
     (pred / "labels.txt").write_text("0\n1\n")
     assert args.func(args) == 2
     assert "2 labels for a mesh with 16 faces" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("mode", ["paper", "robust"])
+def test_cli_segments_when_no_pred_is_given(tmp_path, capsys, mode):
+    import igl
+
+    V, F = igl.upsample(
+        np.array([[x, y, z] for x in (0.0, 1) for y in (0.0, 1) for z in (0.0, 1)]),
+        np.array(
+            [
+                [0, 1, 3],
+                [0, 3, 2],
+                [4, 6, 7],
+                [4, 7, 5],
+                [0, 4, 5],
+                [0, 5, 1],
+                [2, 3, 7],
+                [2, 7, 6],
+                [0, 2, 6],
+                [0, 6, 4],
+                [1, 5, 7],
+                [1, 7, 3],
+            ]
+        ),  # fmt: skip
+        3,
+    )
+    mesh = tmp_path / "cube.obj"
+    igl.write_triangle_mesh(str(mesh), V, F)
+    truth = tmp_path / "sides.txt"
+    truth.write_text("\n".join(str(s) for s in np.repeat(np.arange(6), 2 * 4**3)) + "\n")
+    args = _parser().parse_args(
+        ["evaluate", str(mesh), "--truth", str(truth), "--mode", mode, "--json"]
+    )
+    assert args.func(args) == 0
+    import json
+
+    d = json.loads(capsys.readouterr().out)
+    assert d["n_segments"] == 6 and d["purity"] == pytest.approx(1.0)

@@ -150,7 +150,8 @@ def _fmt(row: dict, key: str, fmt: str) -> str:
 
 def format_table(rows: list[dict]) -> str:
     """Fixed-width text table of :func:`compare_param` rows (one line per row, plus a
-    per-method summary: bijective charts, face-weighted mean symmetric Dirichlet, total time).
+    per-method summary: bijective charts, total flips and overlaps, face-weighted mean
+    distortions over the charts mapped bijectively, total time).
     """
     cells = [[h for _, h, _ in _COLUMNS]]
     for r in rows:
@@ -161,17 +162,26 @@ def format_table(rows: list[dict]) -> str:
     widths = [max(len(c[i]) for c in cells) for i in range(len(_COLUMNS))]
     lines = ["  ".join(c[i].rjust(widths[i]) for i in range(len(c))) for c in cells]
     lines.insert(1, "  ".join("-" * w for w in widths))
-    # Summary per method.
+    # Summary per method (distortion averaged over the charts the method maps bijectively).
     lines.append("")
-    lines.append("method            bijective  symDir(face-weighted, finite)  seconds")
+    lines.append(
+        "method            bijective  flips  overlaps  conf_mean  area_mean  symDir  seconds"
+        "   (means: face-weighted over bijective charts)"
+    )
     for m in dict.fromkeys(r["method"] for r in rows):
         rs = [r for r in rows if r["method"] == m]
-        nb = sum(bool(r.get("bijective")) for r in rs)
-        fin = [r for r in rs if np.isfinite(r.get("sym_dirichlet", np.inf))]
-        w = sum(r["faces"] for r in fin)
-        sd = sum(r["faces"] * r["sym_dirichlet"] for r in fin) / w if w else float("nan")
-        secs = sum(r.get("seconds", 0.0) for r in rs)
-        lines.append(f"{m:16s}  {nb:4d}/{len(rs):<4d}  {sd:29.4f}  {secs:7.2f}")
+        ok = [r for r in rs if r.get("bijective")]
+        w = sum(r["faces"] for r in ok)
+
+        def mean(key, ok=ok, w=w):
+            return sum(r["faces"] * r[key] for r in ok) / w if w else float("nan")
+
+        lines.append(
+            f"{m:16s}  {len(ok):4d}/{len(rs):<4d}  {sum(r.get('flips', 0) for r in rs):5d}  "
+            f"{sum(r.get('overlaps', 0) for r in rs):8d}  {mean('conformal_mean'):9.4f}  "
+            f"{mean('area_mean'):9.4f}  {mean('sym_dirichlet'):6.4f}  "
+            f"{sum(r.get('seconds', 0.0) for r in rs):7.2f}"
+        )
     return "\n".join(lines)
 
 

@@ -100,6 +100,12 @@ EXACT_WORK: float = 2.0e7
 #: (local 51 s vs exact 38 s).
 LOCAL_MAX_FREE_PER_GROUP: float = 300.0
 
+#: Rows (vertices) where all of a patch's fields are below this skip the top-K bookkeeping
+#: for that patch (they only raise the bound on groups not kept).  A winner's value is at
+#: least 1 / (number of groups near), far above this; a wrong skip could only leave a label
+#: uncertified (then refined or solved exactly), never change it.
+SKIP_BELOW: float = 0.02
+
 #: Candidates (lower bounds) kept per vertex and per face.
 TOPK: int = 4
 
@@ -494,6 +500,10 @@ class FastHeatSolver:
             (np.ones(int(sel.sum()), dtype=np.int8), (rows[sel], np.repeat(np.arange(m), 3)[sel])),
             shape=(nf, m),
         )
+        VF = sp.csr_matrix(
+            (np.ones(3 * m, dtype=np.int8), (F.T.ravel(), np.tile(np.arange(m), 3))), shape=(n, m)
+        )
+        vcold = np.zeros(nf)  # largest value of a group at a vertex where it was cold
         # Running top-K lower bounds per free vertex and per face.
         vval = np.full((nf, K), -np.inf)
         vid = np.full((nf, K), -1, dtype=np.int64)
@@ -531,20 +541,35 @@ class FastHeatSolver:
             if bn > 0:
                 resid = max(resid, float(np.abs(ADD @ W - BD).max() / bn))
             wsum[D] += W.sum(axis=1)
-            tv, ti, tx = _topk_rows(W, K)  # patch-local top-K per domain vertex
-            _merge_topk(vval, vid, vexc, D, tv, gids[ti], tx)
+            # Rows where this patch's groups are all below SKIP_BELOW ("cold": far in the
+            # halo) only raise the bound on non-kept groups; no candidates from them.
+            nD, kc = W.shape
+            rmax = W.max(axis=1)
+            hot = rmax >= SKIP_BELOW
+            cold = np.flatnonzero(~hot)
+            vcold[D[cold]] = np.maximum(vcold[D[cold]], rmax[cold])
+            hot = np.flatnonzero(hot)
+            tv, ti_h, tx_h = _topk_rows(W[hot], K)  # patch-local top-K per hot vertex
+            _merge_topk(vval, vid, vexc, D[hot], tv, gids[ti_h], tx_h)
+            vexc[D[cold]] = np.maximum(vexc[D[cold]], rmax[cold])
+            ti = np.zeros((nD, K), dtype=np.int64)
+            ti[hot] = ti_h
+            tx = rmax.copy()
+            tx[hot] = tx_h
             t5 = time.perf_counter()
             tsub[3] += t5 - t4
-            # Faces with a free corner in D.  Candidates: the groups in the local top-K of
-            # their free corners and the groups of their seed corners; every other group of
-            # this patch is below the corner mean of the local (K+1)-th values.
-            faces = np.unique(VFf[D].indices)
-            nD, kc = W.shape
+            # Faces with a hot free corner or a seed corner of an owned group.  Candidates:
+            # the groups in the local top-K of their hot corners and the groups of their seed
+            # corners; every other group of this patch is below the corner mean of the local
+            # (K+1)-th values (cold corners: their maximum).  Faces with only cold corners
+            # are bounded at the end through `vcold`.
+            gpos = np.full(k, -1, dtype=np.int64)
+            gpos[gids] = np.arange(kc)
+            own = self.known[gpos[group[self.known]] >= 0]
+            faces = np.unique(np.r_[VFf[D[hot]].indices, VF[own].indices])
             loc = np.full(nf, nD, dtype=np.int64)
             loc[D] = np.arange(nD)
             Wz = np.vstack([W, np.zeros((1, kc))])
-            gpos = np.full(k, -1, dtype=np.int64)
-            gpos[gids] = np.arange(kc)
             cf = fc[faces]  # free index of corners, -1 at seeds
             lc = np.where(cf >= 0, loc[np.maximum(cf, 0)], nD)  # row in Wz (nD: value 0)
             sg = np.where(cf < 0, gpos[np.maximum(group[F[faces]], 0)], -1)  # own seed groups
@@ -592,6 +617,9 @@ class FastHeatSolver:
         dab[free] = np.abs(d)
         slack_f = CERT_FACTOR * (dab[F[:, 0]] + dab[F[:, 1]] + dab[F[:, 2]]) / 3.0 + CERT_ABS
         has_free = (fc >= 0).any(axis=1)
+        vc = np.zeros(n)
+        vc[free] = vcold
+        fexc = np.maximum(fexc, np.maximum(np.maximum(vc[F[:, 0]], vc[F[:, 1]]), vc[F[:, 2]]))
         rival_f = np.maximum(fval[:, 1], fexc)
         unc_f = has_free & ~(fval[:, 0] - rival_f > slack_f)
 

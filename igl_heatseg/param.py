@@ -22,9 +22,10 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
    :func:`repair_map` re-solves a small region around them harmonically (uniform weights),
    growing it ring by ring; a certified result that raises the symmetric Dirichlet energy by
    at most :data:`REPAIR_MAX_SD_RATIO` is ``"hessian-<energy>+repair"``.
-6. Otherwise: a Tutte map (uniform weights, boundary on a circle by arc length) is
-   bijective by construction (Floyd/Tutte); it is improved by SLIM (symmetric Dirichlet), one
-   iteration at a time with the certificate after each, keeping the last bijective iterate.
+6. Otherwise: a convex-combination map (Floater's mean value weights, boundary on a circle
+   by arc length) is bijective by construction (Tutte, Floater); it is improved by SLIM
+   (symmetric Dirichlet), all iterations at once or, if that result fails the certificate,
+   one iteration at a time with the certificate after each, keeping the last bijective map.
    Free boundary first; if its boundary starts to overlap before the last iteration, SLIM
    with the boundary held on the circle is tried too, and the lower energy wins
    (``"tutte+slim"`` / ``"tutte+slim-fixed"``).
@@ -391,20 +392,31 @@ def _circle_boundary(V: np.ndarray, bnd: np.ndarray) -> np.ndarray:
     return np.stack([np.cos(ang), np.sin(ang)], axis=1)
 
 
-def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np.ndarray:
-    """Tutte embedding: uniform-weight harmonic map with the boundary on a circle.
+def tutte_map(
+    V: np.ndarray,
+    F: np.ndarray,
+    bnd: np.ndarray | None = None,
+    weights: Literal["mean_value", "uniform"] = "mean_value",
+) -> np.ndarray:
+    """Convex-combination (Tutte/Floater) map with the boundary on a circle.
 
-    Bijective by construction for a triangulated disk (the boundary polygon is strictly
-    convex), up to floating-point rounding of the linear solve.
+    Every interior vertex is a positive-weight average of its neighbours; the boundary goes to
+    the unit circle, spaced by arc length.  With positive weights and a strictly convex
+    boundary the map of a triangulated disk is bijective (Tutte 1963, Floater 2003), up to
+    floating-point rounding of the linear solve (the certificate checks it).  Floater's mean
+    value weights (default) follow the 3D geometry: on sliver-rich CAD tessellations they gave
+    a symmetric Dirichlet energy of 5.6e3 where uniform weights gave 5e22 (abc_stl2_00000008).
 
     Parameters
     ----------
     V : (n, 3) float64
-        Vertices (only the boundary's arc length is used).
+        Vertices.
     F : (m, 3) int64
         Disk triangulation using every vertex.
     bnd : (b,) int64, optional
         Ordered boundary loop (surface on the left); computed when omitted.
+    weights : {"mean_value", "uniform"}
+        Floater's mean value weights or Tutte's uniform weights.
 
     Returns
     -------
@@ -414,10 +426,15 @@ def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np
     n = V.shape[0]
     if bnd is None:
         bnd = boundary_loops(F)[0]
-    E = _edges(F)
-    A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
-                      shape=(n, n))
-    L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
+    if weights == "mean_value":
+        L = _mean_value_laplacian(V, F)
+    else:
+        E = _edges(F)
+        A = sp.csr_matrix(
+            (np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+            shape=(n, n),
+        )
+        L = (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
     UV = np.zeros((n, 2))
     UV[bnd] = _circle_boundary(V, bnd)
     inner = np.setdiff1d(np.arange(n), bnd)
@@ -427,6 +444,8 @@ def tutte_map(V: np.ndarray, F: np.ndarray, bnd: np.ndarray | None = None) -> np
         solve = spla.factorized(LII)
         UV[inner, 0] = solve(rhs[:, 0])
         UV[inner, 1] = solve(rhs[:, 1])
+        if weights == "mean_value" and not np.all(np.isfinite(UV)):
+            return tutte_map(V, F, bnd, "uniform")
     return UV
 
 

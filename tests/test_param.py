@@ -202,13 +202,32 @@ def test_auto_energy_tries_hlle_then_curved():
     assert res.bijective and res.fallback_used
 
 
-def test_tutte_is_bijective_on_bad_triangles():
-    V, F = grid(10, 10, jitter=0.45, seed=3)
-    V[:, 2] = np.sin(5 * V[:, 0]) * 0.5
-    UV = tutte_map(V, F)
+@pytest.mark.parametrize("weights", ["mean_value", "uniform"])
+def test_tutte_is_bijective_on_bad_triangles(weights):
     from igl_heatseg.bijectivity import certify_map
 
+    V, F = grid(10, 10, jitter=0.45, seed=3)
+    V[:, 2] = np.sin(5 * V[:, 0]) * 0.5
+    UV = tutte_map(V, F, weights=weights)
     assert certify_map(UV, F).bijective
+    # Boundary on the unit circle.
+    from igl_heatseg.topology import boundary_loops
+
+    assert np.allclose(np.linalg.norm(UV[boundary_loops(F)[0]], axis=1), 1.0)
+
+
+def test_mean_value_tutte_reproduces_flat_interior():
+    """Mean value weights have linear precision: with the boundary at its own positions a flat
+    chart's interior comes back exactly (uniform weights do not on a jittered grid)."""
+    from igl_heatseg.param import _mean_value_laplacian
+
+    V, F = grid(8, 8, jitter=0.3, seed=2)
+    L = _mean_value_laplacian(V, F)
+    from igl_heatseg.topology import boundary_loops
+
+    bnd = boundary_loops(F)[0]
+    inner = np.setdiff1d(np.arange(len(V)), bnd)
+    assert np.abs((L @ V[:, :2])[inner]).max() < 1e-12
 
 
 def test_unreferenced_vertices_get_nan():

@@ -423,15 +423,10 @@ class FastHeatSolver:
             sel = np.flatnonzero(cmax > fmax_h)
             if len(sel):
                 Fs = Fh[sel]
-                corner = []
-                for j in range(3):
-                    c = Fs[:, j]
-                    cf = fidx[c]
-                    Uc = np.zeros((len(sel), g1 - g0))
-                    Uc[cf >= 0] = X[cf[cf >= 0]]
-                    sc = np.flatnonzero(cf < 0)
-                    Uc[sc] = (group[c[sc]][:, None] == gs[None, :]).astype(np.float64)
-                    corner.append(Uc)
+                U = np.empty((n, g1 - g0))
+                U[free] = X
+                U[known] = (group[known][:, None] == gs[None, :]).astype(np.float64)
+                corner = [U[Fs[:, 0]], U[Fs[:, 1]], U[Fs[:, 2]]]
                 Uf = (corner[0] + corner[1] + corner[2]) / 3.0
                 best = fmax_h[sel]
                 arg = farg_h[sel]

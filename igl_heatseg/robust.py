@@ -93,7 +93,7 @@ FLAT_CURVATURE: float = 0.15
 
 #: Two flat seed vertices join only if their normals differ by less than this (radians): a
 #: large-radius fillet that turns less than FLAT_CURVATURE per edge is still cut from its plane.
-FLAT_NORMAL_ANGLE: float = 0.1
+FLAT_NORMAL_ANGLE: float = 0.07
 
 #: A curved vertex is umbilic (sphere-like) when ``min |k| >= ANISOTROPY * max |k|``.
 ANISOTROPY: float = 0.5

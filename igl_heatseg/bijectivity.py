@@ -186,9 +186,10 @@ def _segments_intersect(P1, P2, Q1, Q2) -> np.ndarray:
     o3, _ = _orient(Q1, Q2, P1)
     o4, _ = _orient(Q1, Q2, P2)
     proper = (o1 * o2 <= 0) & (o3 * o4 <= 0)
-    collinear = (o1 == 0) & (o2 == 0)
-    # For collinear segments the orientation test says "yes" always; require overlap of the
-    # coordinate ranges (exact comparisons of floats).
+    # All four orientations vanish only for collinear segments (or points): there the
+    # orientation test says "yes" always; require overlap of the coordinate ranges (exact
+    # comparisons of floats).  A zero-length segment off the other's line has o3 = o4 != 0.
+    collinear = (o1 == 0) & (o2 == 0) & (o3 == 0) & (o4 == 0)
     lo_p = np.minimum(P1, P2)
     hi_p = np.maximum(P1, P2)
     lo_q = np.minimum(Q1, Q2)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from igl_heatseg.bijectivity import (
@@ -131,6 +131,7 @@ def test_overlap_count_matches_brute_force():
 
 @settings(max_examples=25, deadline=None)
 @given(st.integers(min_value=0, max_value=10_000), st.floats(min_value=0.01, max_value=0.6))
+@example(231, 0.125)  # snapped vertices: zero-length boundary edges (was a false positive)
 def test_grid_search_equals_brute_force_on_random_boundaries(seed, amp):
     """Random perturbations of a boundary polygon: the grid finds exactly the all-pairs hits."""
     rng = np.random.default_rng(seed)
@@ -143,6 +144,16 @@ def test_grid_search_equals_brute_force_on_random_boundaries(seed, amp):
     pairs, _ = boundary_self_intersections(P, E)
     got = [tuple(p) for p in pairs.tolist() if not (set(E[p[0]]) & set(E[p[1]]))]
     assert got == sorted(brute_force_pairs(P, E))
+
+
+def test_zero_length_segment_off_the_line_does_not_intersect():
+    from igl_heatseg.bijectivity import _segments_intersect
+
+    P = np.array([[0.5, 0.2]])  # a point inside the other segment's bounding box, off its line
+    Q1, Q2 = np.array([[0.0, 0.0]]), np.array([[1.0, 1.0]])
+    assert not _segments_intersect(P, P, Q1, Q2)[0]
+    on = np.array([[0.25, 0.25]])
+    assert _segments_intersect(on, on, Q1, Q2)[0]
 
 
 def test_touching_boundary_counts_as_overlap():

@@ -21,7 +21,7 @@ import numpy as np
 
 from .checks import CleanMesh
 from .errors import MeshError
-from .param import METHODS, compare_methods
+from .param import METHODS, PIPELINE_METHODS, compare_methods
 
 __all__ = ["chart_disks", "compare_param", "format_table", "register", "DEFAULT_METHODS"]
 
@@ -35,6 +35,7 @@ _COLUMNS = (
     ("chart", "chart", "{}"),
     ("faces", "faces", "{}"),
     ("method", "method", "{}"),
+    ("result", "result", "{}"),
     ("bijective", "bij", "{}"),
     ("flips", "flips", "{}"),
     ("overlaps", "overl", "{}"),
@@ -109,7 +110,9 @@ def compare_param(
     theta, eps : float, optional
         Segmentation parameters (paper defaults when ``None``).
     methods : sequence of str
-        Names from :data:`igl_heatseg.param.METHODS`.
+        Names from :data:`igl_heatseg.param.METHODS` (one map, no fallback) or
+        :data:`igl_heatseg.param.PIPELINE_METHODS` (``param-hlle`` ...: the full chart
+        parameterization with repair and fallbacks; the row's ``result`` says which map).
     min_faces : int
         Skip charts with fewer faces.
 
@@ -126,9 +129,10 @@ def compare_param(
     from .constants import EPS_DEFAULT, THETA_DEFAULT
     from .segment import segment_mesh
 
-    bad = [m for m in methods if m not in METHODS]
+    known = METHODS + PIPELINE_METHODS
+    bad = [m for m in methods if m not in known]
     if bad:
-        raise MeshError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(METHODS)}")
+        raise MeshError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(known)}")
     seg = segment_mesh(
         mesh,
         THETA_DEFAULT if theta is None else theta,
@@ -176,12 +180,18 @@ def format_table(rows: list[dict]) -> str:
         def mean(key, ok=ok, w=w):
             return sum(r["faces"] * r[key] for r in ok) / w if w else float("nan")
 
-        lines.append(
+        line = (
             f"{m:16s}  {len(ok):4d}/{len(rs):<4d}  {sum(r.get('flips', 0) for r in rs):5d}  "
             f"{sum(r.get('overlaps', 0) for r in rs):8d}  {mean('conformal_mean'):9.4f}  "
             f"{mean('area_mean'):9.4f}  {mean('sym_dirichlet'):6.4f}  "
             f"{sum(r.get('seconds', 0.0) for r in rs):7.2f}"
         )
+        if any("result" in r for r in rs):
+            results = [r.get("result", "error") for r in rs]
+            nfb = sum(bool(r.get("fallback_used")) for r in rs)
+            counts = ", ".join(f"{k} {results.count(k)}" for k in dict.fromkeys(results))
+            line += f"   fallback {nfb}/{len(rs)} ({counts})"
+        lines.append(line)
     return "\n".join(lines)
 
 
@@ -228,8 +238,9 @@ def register(subparsers) -> None:
     p.add_argument(
         "--methods",
         default=",".join(DEFAULT_METHODS),
-        help=f"comma-separated methods out of {', '.join(METHODS)} "
-        f"(default {','.join(DEFAULT_METHODS)})",
+        help=f"comma-separated methods out of {', '.join(METHODS)} (one map, no fallback) and "
+        f"{', '.join(PIPELINE_METHODS)} (the full chart parameterization with repair and "
+        f"certified fallbacks) (default {','.join(DEFAULT_METHODS)})",
     )
     p.add_argument("--min-faces", type=int, default=1, help="skip charts with fewer faces")
     p.add_argument("--json", metavar="PATH", help="also write the rows as JSON")

@@ -74,6 +74,7 @@ __all__ = [
     "distortion",
     "compare_methods",
     "METHODS",
+    "PIPELINE_METHODS",
     "NULLSPACE_TOL",
     "EIGEN_SHIFT",
     "DENSE_EIGEN_MAX",
@@ -118,6 +119,10 @@ REPAIR_MAX_SD_RATIO: float = 1.05
 
 #: Soft-constraint weight holding the boundary in the fixed-boundary SLIM variant.
 SLIM_SOFT_P: float = 1e5
+
+#: Full :func:`parameterize_chart` runs (with repair and fallbacks) known to
+#: :func:`compare_methods`.
+PIPELINE_METHODS: tuple[str, ...] = ("param-hlle", "param-curved", "param-auto")
 
 #: Methods known to :func:`map_chart`.
 METHODS: tuple[str, ...] = (
@@ -973,28 +978,36 @@ def compare_methods(
 ) -> list[dict]:
     """Run several parameterization methods on disk charts; one table row per (chart, method).
 
-    Every method goes through the same certificate and distortion code, without fallback.
+    Every method goes through the same certificate and distortion code.  Names from
+    :data:`METHODS` run :func:`map_chart` (one method, no fallback); ``"param-hlle"``,
+    ``"param-curved"``, ``"param-auto"`` run the full :func:`parameterize_chart` (Hessian map,
+    repair, certified fallbacks) and report which map it produced.
 
     Parameters
     ----------
     charts : iterable of (name, V, F)
         Disk charts.
     methods : sequence of str
-        Names from :data:`METHODS`.
+        Names from :data:`METHODS` or :data:`PIPELINE_METHODS`.
 
     Returns
     -------
     rows : list of dict
         Keys ``chart, faces, method, bijective, flips, overlaps, degenerate, conformal_mean,
-        conformal_max, area_mean, area_max, sym_dirichlet, stretch_max, seconds`` (and
-        ``error`` when a method raised).
+        conformal_max, area_mean, area_max, sym_dirichlet, stretch_max, seconds``; for the
+        ``param-*`` names also ``result`` (the method recorded for the chart) and
+        ``fallback_used``; ``error`` when a method raised.
     """
     rows = []
     for cname, V, F in charts:
         for method in methods:
             row = {"chart": cname, "faces": int(np.shape(F)[0]), "method": method}
             try:
-                res = map_chart(V, F, method, name=str(cname))
+                if method in PIPELINE_METHODS:
+                    res = parameterize_chart(V, F, method[len("param-"):], name=str(cname))
+                    row.update({"result": res.method, "fallback_used": res.fallback_used})
+                else:
+                    res = map_chart(V, F, method, name=str(cname))
             except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
                 row.update({"bijective": False, "error": str(exc)})
                 rows.append(row)

@@ -60,6 +60,14 @@ def test_chart_disks_are_disks():
     assert all(F.shape[0] == 32 for _, _, F in charts)
 
 
+def test_pipeline_methods_report_the_resulting_map():
+    rows = compare_param(open_box(3), methods=["param-auto"])
+    assert len(rows) == 5
+    for r in rows:
+        assert r["result"] == "hessian-hlle" and r["fallback_used"] is False
+    assert "fallback 0/5" in format_table(rows)
+
+
 def test_unknown_method_raises():
     with pytest.raises(MeshError, match="unknown method"):
         compare_param(open_box(2), methods=["hessian-hlle", "magic"])

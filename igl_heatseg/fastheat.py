@@ -8,9 +8,11 @@ semidefinite) and ``f`` the free vertices, ``A_ff u_i = L_fs 1_{S_i}`` for every
 
 Two regimes
 -----------
-*Few groups* (``k * n_free <= exact_work``): one sparse Cholesky factorization of ``A_ff``
-(CHOLMOD through ``cholespy`` when installed, else SuperLU) and all ``k`` fields solved exactly
-in batches, reduced on the fly to the argmax as ``HeatSolver`` does.
+*Few or sparse groups* (``k * n_free <= exact_work``, or more than
+``LOCAL_MAX_FREE_PER_GROUP`` free vertices per group): one sparse Cholesky factorization of
+``A_ff`` (libigl's LLT for fewer than 80 groups, else CHOLMOD through ``cholespy`` when
+installed) and all ``k`` fields solved exactly in batches of 32, folded on the fly into the
+argmax as ``HeatSolver`` does.
 
 *Many groups* (noisy scans: thousands of one-vertex groups): local solves with certificates.
 
@@ -18,7 +20,8 @@ in batches, reduced on the fly to the argmax as ``HeatSolver`` does.
    Morton order of their positions).  Each group is *owned* by the patch that holds most of the
    free neighbours of its seeds.
 2. The *domain* ``D_c`` of patch ``c`` is the patch, plus the free neighbours of its groups'
-   seeds, grown by ``halo`` edge hops through free vertices.  One factorization of ``A_DD``
+   seeds, grown by ``halo`` edge hops through free vertices (halo and patch size grow with
+   the free vertices per group, :func:`_local_params`).  One factorization of ``A_DD``
    per patch; one right-hand side per owned group.  The result ``w_i`` solves the problem with
    ``u = 0`` imposed on the free vertices outside ``D_c`` (``w_i = 0`` there).
 3. Truncation error.  ``e_i = u_i - w_i`` is harmonic in ``D_c`` with boundary values
@@ -27,9 +30,12 @@ in batches, reduced on the fly to the argmax as ``HeatSolver`` does.
    ``sum_i e_i = d := 1 - sum_i w_i``, so ``0 <= e_i(v) <= d(v)`` for every group at once.
    Hence ``w_i(v) <= u_i(v) <= w_i(v) + d(v)``: a vertex whose best lower bound beats every
    other group's upper bound is *certified*; faces likewise with the corner mean of ``d``.
-4. Everything not certified is recomputed exactly: the groups that could still win there
-   (upper bound >= best lower bound) are solved on the whole mesh with one global
-   factorization, and the argmax over them is taken from exact values.
+4. Refinement: the groups that could still win at an uncertified vertex or face (upper bound
+   >= best lower bound) are re-solved on domains grown ``refine_halo`` (30) hops around it.
+   With ``h`` the harmonic measure of that domain's outer boundary (one more right-hand
+   side), ``w <= u <= w + h`` under the same M-matrix condition, and ``h`` is tiny that deep.
+5. Whatever is still uncertified is recomputed exactly: its candidate groups are solved on
+   the whole mesh with one global factorization, and the argmax is taken from exact values.
 
 Real scans have a few negative cotangent weights (obtuse triangle pairs; iron.ply: 1.2 % of
 its edges), where the maximum principle and so the bound of step 3 may fail; fields there even

@@ -5,7 +5,10 @@
 (default: Hessian HLLE, Hessian curved, libigl harmonic, libigl LSCM), without fallbacks, all
 through the same bijectivity certificate and distortion code
 (:func:`igl_heatseg.param.compare_methods`).  It prints one table: chart, faces, method,
-bijective, flips, overlaps, distortions, seconds.
+bijective, flips, overlaps, distortions, seconds, and a per-method summary.  The pseudo-methods
+``param-hlle``, ``param-curved`` and ``param-auto`` run the full chart parameterization
+(:func:`igl_heatseg.param.parameterize_chart`: Hessian map, local repair, certified fallbacks)
+and report the map each chart got and the share of charts that needed a fallback.
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .constants import DEGENERATE_FACE_TOL
 from .errors import MeshError
-from .topology import corner_edges, edge_topology
+from .topology import corner_edges, edge_topology, unique_rows
 
 __all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays"]
 
@@ -166,7 +166,7 @@ def validate_mesh(
 
     # Clean: drop unreferenced vertices, merge exact duplicates (STL stores 3 per face).
     ref = np.flatnonzero(used)
-    uniq, inverse = np.unique(V[ref], axis=0, return_inverse=True)
+    uniq, inverse = unique_rows(V[ref], return_inverse=True)
     inverse = inverse.reshape(-1)
     vertex_map = np.full(n_in, -1, dtype=np.int64)
     vertex_map[ref] = inverse
@@ -280,6 +280,6 @@ def _nonmanifold_vertices(F: np.ndarray, topo) -> np.ndarray:
     A = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m))
     _, comp = connected_components(A, directed=False)
     corner_vertex = F.T.ravel()  # node j*m+f -> F[f, j]
-    pairs = np.unique(np.stack([corner_vertex, comp], axis=1), axis=0)
+    pairs = unique_rows(np.stack([corner_vertex, comp], axis=1))
     fans = np.bincount(pairs[:, 0], minlength=n)
     return np.flatnonzero(fans > 1)

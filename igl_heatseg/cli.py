@@ -159,7 +159,9 @@ def _cmd_segment(args: argparse.Namespace) -> int:
     if args.progress == "auto":
         progress.enabled = mesh.F.shape[0] >= PROGRESS_MIN_FACES
     progress("loading", 1.0)
-    seg = segment_mesh(mesh, args.theta, args.eps, progress=progress, keep_solvers=False)
+    seg = segment_mesh(
+        mesh, args.theta, args.eps, progress=progress, keep_solvers=False, solver=args.solver
+    )
     out = Path(args.out)
     extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
     report = write_segmentation(out, mesh, seg, extra, t_start=t0)
@@ -191,6 +193,17 @@ def add_segment_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_solver_argument(p: argparse.ArgumentParser) -> None:
+    """Add ``--solver fast|exact`` to a subparser."""
+    p.add_argument(
+        "--solver",
+        choices=("fast", "exact"),
+        default="fast",
+        help="heat solver: fast (certified local solves, same labels; default) or exact "
+        "(one global solve per seed group: the reference, slow on noisy scans)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``igl-heatseg`` argument parser with every subcommand registered."""
     parser = argparse.ArgumentParser(
@@ -210,6 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("mesh", help="input mesh file")
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
     add_segment_arguments(p)
+    add_solver_argument(p)
     p.add_argument(
         "--progress",
         choices=("auto", "always", "never"),

@@ -206,6 +206,7 @@ def run_pipeline(
     extra: dict | None = None,
     t_start: float | None = None,
     pictures: bool = False,
+    solver: str = "fast",
 ) -> PipelineResult:
     """Segment, cut, parameterize, pack and (optionally) write a mesh.
 
@@ -237,6 +238,8 @@ def run_pipeline(
         Also write ``segmentation.png`` and ``checker.png`` into ``out_dir``
         (:func:`igl_heatseg.viz.write_run_pictures`; skipped with a warning when polyscope or
         an OpenGL context is missing).
+    solver : {"fast", "exact"}
+        Heat solver for the segmentation (see :func:`igl_heatseg.segment.segment_mesh`).
 
     Returns
     -------
@@ -257,7 +260,7 @@ def run_pipeline(
     t0 = time.perf_counter() if t_start is None else t_start
     _check_cut_paths(mesh, cut_paths)  # before the (long) segmentation
     progress = progress or (lambda stage, fraction=1.0: None)
-    seg = segment_mesh(mesh, theta, eps, progress=progress, keep_solvers=False)
+    seg = segment_mesh(mesh, theta, eps, progress=progress, keep_solvers=False, solver=solver)
     V, F = mesh.V, mesh.F
     m = F.shape[0]
     areas = _face_areas(V, F)
@@ -468,6 +471,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         args.out,
         theta=args.theta,
         eps=args.eps,
+        solver=args.solver,
         energy=args.energy,
         cut=args.cut,
         cut_paths=args.cut_path or [],
@@ -501,7 +505,7 @@ def register(subparsers) -> None:
         Exit code 0 (a chart without a bijective map is reported in report.json and warned
         about on stderr).
     """
-    from .cli import PROGRESS_MIN_FACES, add_segment_arguments
+    from .cli import PROGRESS_MIN_FACES, add_segment_arguments, add_solver_argument
 
     p = subparsers.add_parser(
         "run",
@@ -514,6 +518,7 @@ def register(subparsers) -> None:
     p.add_argument("mesh", help="input mesh file")
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
     add_segment_arguments(p)
+    add_solver_argument(p)
     p.add_argument(
         "--energy",
         choices=("hlle", "curved"),

@@ -28,15 +28,27 @@ from scipy.sparse.csgraph import connected_components
 
 from .checks import CleanMesh
 from .constants import EPS_DEFAULT, THETA_DEFAULT
+from .fastheat import FastHeatSolver
 from .heat import HeatSolver
 from .seeds import dihedral_deviation, seed_groups, sharp_edges
 from .topology import EdgeTopology, edge_topology, vertex_components
 
-__all__ = ["Segmentation", "segment_mesh", "segment", "make_face_connected", "face_areas"]
+__all__ = [
+    "Segmentation",
+    "segment_mesh",
+    "segment",
+    "make_face_connected",
+    "face_areas",
+    "SOLVERS",
+]
 
 log = logging.getLogger(__name__)
 
 Progress = Callable[[str, float], None]
+
+#: Heat solvers by name: "fast" (default; certified local solves, same labels) and "exact"
+#: (the reference: one global solve per group).  See :mod:`igl_heatseg.fastheat`.
+SOLVERS = {"fast": FastHeatSolver, "exact": HeatSolver}
 
 
 @dataclass
@@ -150,6 +162,7 @@ def segment_mesh(
     *,
     progress: Progress | None = None,
     keep_solvers: bool = True,
+    solver: str = "fast",
 ) -> Segmentation:
     """Segment a validated mesh as the paper does.
 
@@ -166,6 +179,10 @@ def segment_mesh(
         Called during the heat solves (``stage`` is ``"heat initial"`` or ``"heat final"``).
     keep_solvers : bool
         Keep both factorizations so that :meth:`Segmentation.temperature` works.
+    solver : {"fast", "exact"}
+        Heat solver: ``"fast"`` (:class:`~igl_heatseg.fastheat.FastHeatSolver`, default)
+        or ``"exact"`` (:class:`~igl_heatseg.heat.HeatSolver`, one global solve per group;
+        the reference the fast one is tested against).
 
     Returns
     -------
@@ -190,6 +207,9 @@ def segment_mesh(
         raise ValueError(f"theta must be in (0, pi] radians, got {theta!r}")
     if not (isinstance(eps, (int, float)) and 0 <= eps <= 1):
         raise ValueError(f"eps must be in [0, 1], got {eps!r}")
+    if solver not in SOLVERS:
+        raise ValueError(f"solver must be one of {sorted(SOLVERS)}, got {solver!r}")
+    solver_cls = SOLVERS[solver]
     V, F = mesh.V, mesh.F
     n = V.shape[0]
     timings: dict[str, float] = {}
@@ -217,7 +237,7 @@ def segment_mesh(
     timings["laplacian"] = time.perf_counter() - t
 
     labels0, solver0, merged0, hl0 = _heat_round(
-        V, F, group0, L, area, topo, timings, "initial", progress
+        V, F, group0, L, area, topo, timings, "initial", progress, solver_cls
     )
     areas0 = np.bincount(labels0, weights=area, minlength=k0)
 
@@ -237,7 +257,7 @@ def segment_mesh(
         remap[kept] = np.arange(len(kept))
         group1 = np.where(group0 >= 0, remap[np.maximum(group0, 0)], -1)
         labels1, solver1, merged1, hl1 = _heat_round(
-            V, F, group1, L, area, topo, timings, "final", progress
+            V, F, group1, L, area, topo, timings, "final", progress, solver_cls
         )
     k1 = len(kept)
 
@@ -279,9 +299,9 @@ def segment_mesh(
     )
 
 
-def _heat_round(V, F, group, L, area, topo, timings, stage, progress):
+def _heat_round(V, F, group, L, area, topo, timings, stage, progress, solver_cls=FastHeatSolver):
     t = time.perf_counter()
-    solver = HeatSolver(V, F, group, L)
+    solver = solver_cls(V, F, group, L)
     timings[f"factor_{stage}"] = time.perf_counter() - t
     t = time.perf_counter()
     cb = None if progress is None else (lambda f: progress(f"heat {stage}", f))
@@ -396,7 +416,11 @@ def make_face_connected(
 
 
 def segment(
-    V: np.ndarray, F: np.ndarray, theta: float = THETA_DEFAULT, eps: float = EPS_DEFAULT
+    V: np.ndarray,
+    F: np.ndarray,
+    theta: float = THETA_DEFAULT,
+    eps: float = EPS_DEFAULT,
+    solver: str = "fast",
 ) -> np.ndarray:
     """One-off wrapper: validate ``V, F`` and return the final face labels.
 
@@ -406,6 +430,8 @@ def segment(
     F : (m, 3) array_like of int
     theta, eps : float
         See :func:`segment_mesh`.
+    solver : {"fast", "exact"}
+        See :func:`segment_mesh`.
 
     Returns
     -------
@@ -414,4 +440,4 @@ def segment(
     """
     from .checks import validate_mesh
 
-    return segment_mesh(validate_mesh(V, F), theta, eps, keep_solvers=False).labels
+    return segment_mesh(validate_mesh(V, F), theta, eps, keep_solvers=False, solver=solver).labels

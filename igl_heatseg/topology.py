@@ -17,6 +17,8 @@ from scipy.sparse.csgraph import connected_components
 
 __all__ = [
     "EdgeTopology",
+    "unique_rows",
+    "corner_edges",
     "edge_topology",
     "face_adjacency",
     "face_components",
@@ -59,6 +61,66 @@ class EdgeTopology:
         return self.edge_face_count == 2
 
 
+def unique_rows(A: np.ndarray, return_inverse: bool = False, return_counts: bool = False):
+    """Unique rows of a 2-D array, sorted lexicographically: ``np.unique(A, axis=0, ...)``.
+
+    ``np.unique(axis=0)`` sorts rows as opaque (void) elements with a generic comparison and is
+    several times slower on meshes (iron.ply: ``validate_mesh`` 2.65 s -> 0.65 s,
+    ``edge_topology`` 0.88 s -> 0.18 s).  Rows of two non-negative integers are packed into one
+    int64 key and argsorted; other rows are ordered with ``np.lexsort``.  The output is
+    identical to numpy's (``-0.0`` and ``0.0`` compare equal in both).
+
+    Parameters
+    ----------
+    A : (r, c) int or float array
+        No NaN (rows holding NaN never compare equal in ``np.unique`` either).
+    return_inverse : bool
+        Also return ``inverse`` (r,) int64 with ``U[inverse] == A``.
+    return_counts : bool
+        Also return ``counts`` (u,) int64.
+
+    Returns
+    -------
+    U : (u, c) array of ``A.dtype``
+    inverse : (r,) int64, optional
+    counts : (u,) int64, optional
+    """
+    A = np.asarray(A)
+    r = A.shape[0]
+    if r == 0:
+        out = [A[:0]]
+        if return_inverse:
+            out.append(np.zeros(0, dtype=np.int64))
+        if return_counts:
+            out.append(np.zeros(0, dtype=np.int64))
+        return out[0] if len(out) == 1 else tuple(out)
+    key = None
+    if A.dtype.kind in "iu" and A.shape[1] == 2 and A.min() >= 0:
+        b = np.int64(A[:, 1].max()) + 1
+        if A[:, 0].max() < np.iinfo(np.int64).max // b:
+            key = A[:, 0].astype(np.int64) * b + A[:, 1]
+    new = np.empty(r, dtype=bool)
+    new[0] = True
+    if key is not None:
+        order = np.argsort(key)  # int64 sort: vectorized, unlike void-row sorts
+        ks = key[order]
+        new[1:] = ks[1:] != ks[:-1]
+        S = A[order]
+    else:
+        order = np.lexsort(A.T[::-1])
+        S = A[order]
+        new[1:] = (S[1:] != S[:-1]).any(axis=1)
+    starts = np.flatnonzero(new)
+    out = [S[starts]]
+    if return_inverse:
+        inv = np.empty(r, dtype=np.int64)
+        inv[order] = np.cumsum(new) - 1
+        out.append(inv)
+    if return_counts:
+        out.append(np.diff(np.r_[starts, r]).astype(np.int64))
+    return out[0] if len(out) == 1 else tuple(out)
+
+
 def corner_edges(F: np.ndarray) -> np.ndarray:
     """Directed corner-edges of ``F``.
 
@@ -89,7 +151,7 @@ def edge_topology(F: np.ndarray) -> EdgeTopology:
     m = F.shape[0]
     D = corner_edges(F)
     S = np.sort(D, axis=1)
-    E, EMAP, counts = np.unique(S, axis=0, return_inverse=True, return_counts=True)
+    E, EMAP, counts = unique_rows(S, return_inverse=True, return_counts=True)
     EMAP = EMAP.reshape(-1).astype(np.int64)
     faces = np.tile(np.arange(m, dtype=np.int64), 3)
     order = np.argsort(EMAP, kind="stable")
@@ -165,7 +227,7 @@ def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
     """
     D = corner_edges(F)
     S = np.sort(D, axis=1)
-    _, inv, counts = np.unique(S, axis=0, return_inverse=True, return_counts=True)
+    _, inv, counts = unique_rows(S, return_inverse=True, return_counts=True)
     bd = D[counts[inv.reshape(-1)] == 1]
     if len(bd) == 0:
         return []
@@ -197,5 +259,5 @@ def euler_characteristic(F: np.ndarray) -> int:
     chi : int
     """
     nv = len(np.unique(F))
-    ne = len(np.unique(np.sort(corner_edges(F), axis=1), axis=0))
+    ne = len(unique_rows(np.sort(corner_edges(F), axis=1)))
     return int(nv - ne + F.shape[0])

@@ -78,6 +78,7 @@ def labelled_meshes(
     seeds=SEEDS_DEFAULT,
     data: Path = DATA_DEFAULT,
     target_faces: int = 15000,
+    irregular: float = 0.0,
 ) -> Iterator[tuple[str, np.ndarray, np.ndarray, list]]:
     """Yield ``(name, V, F, truths)`` for every labelled mesh (clean)."""
     from igl_heatseg.io import load_mesh
@@ -90,8 +91,8 @@ def labelled_meshes(
         from make_parts import make_part
 
         for s in seeds:
-            p = make_part(s, target_faces=target_faces)
-            yield p.name, p.V, p.F, [p.labels]
+            p = make_part(s, target_faces=target_faces, irregular=irregular)
+            yield p.name + (f"_irr{irregular:g}" if irregular else ""), p.V, p.F, [p.labels]
     if "psb" in kinds:
         for name in PSB:
             mesh = load_mesh(data / f"{name}.off")
@@ -200,11 +201,14 @@ def run(
     psb_metrics: bool = False,
     target_faces: int = 15000,
     on_row: Callable[[dict], None] | None = None,
+    irregular: float = 0.0,
 ) -> list[dict]:
     """Evaluate every method on every labelled mesh and noise level; return the rows."""
     fns = available_methods(methods)
     rows = []
-    for k, (name, V0, F, truths) in enumerate(labelled_meshes(kinds, seeds, data, target_faces)):
+    for k, (name, V0, F, truths) in enumerate(
+        labelled_meshes(kinds, seeds, data, target_faces, irregular)
+    ):
         for frac in noise:
             V = noisy(V0, F, frac, seed=1000 + k)
             mesh = validate_mesh(V, F, name=name)
@@ -273,6 +277,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--noise", nargs="+", type=float, default=list(NOISE_DEFAULT))
     ap.add_argument("--seeds", nargs="+", type=int, default=list(SEEDS_DEFAULT))
     ap.add_argument("--target-faces", type=int, default=15000)
+    ap.add_argument(
+        "--irregular", type=float, default=0.0, help="irregular triangulation of the parts"
+    )
     ap.add_argument("--data", type=Path, default=DATA_DEFAULT)
     ap.add_argument("--no-bij", action="store_true", help="skip the bijectivity column")
     ap.add_argument("--max-charts", type=int, default=MAX_CHARTS_DEFAULT)
@@ -301,6 +308,7 @@ def main(argv: list[str] | None = None) -> int:
         args.psb,
         args.target_faces,
         on_row=progress,
+        irregular=args.irregular,
     )
     sys.stdout.write(format_table(rows, args.psb))
     sys.stdout.write(f"\n{len(rows)} rows in {time.perf_counter() - t0:.0f} s\n")

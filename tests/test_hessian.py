@@ -129,7 +129,7 @@ def test_cylinder_intrinsic_coordinates_are_near_null(name, energy, rq_max):
     V, F, S = cylinder_patch(30, 20)
     K = energy(V, F)
     M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).toarray()
-    lam = sla.eigh(K.toarray(), M, eigvals_only=True)
+    lam = sla.eigh(K.toarray(), M, eigvals_only=True, subset_by_index=[0, 3])
     first_nonaffine = lam[3]
     assert first_nonaffine > 1.0
     for f in S.T:
@@ -145,12 +145,12 @@ def test_creased_developable_chart():
     V, F, S = folded_sheet()
     M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).toarray()
     for K in (hlle_energy(V, F), curved_hessian_energy(V, F)):
-        lam = sla.eigh(K.toarray(), M, eigvals_only=True)
+        lam = sla.eigh(K.toarray(), M, eigvals_only=True, subset_by_index=[0, 3])
         assert lam[2] < 1e-8 * lam[3]
         assert max(rayleigh(K, M, f) for f in S.T) < 1e-10 * lam[3]
     for coords in ("projection", "normal"):
         K = hlle_energy(V, F, coords=coords)
-        lam = sla.eigh(K.toarray(), M, eigvals_only=True)
+        lam = sla.eigh(K.toarray(), M, eigvals_only=True, subset_by_index=[0, 3])
         assert rayleigh(K, M, S[:, 0]) > 1e-2 * lam[3]
 
 

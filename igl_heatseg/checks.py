@@ -11,13 +11,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse.csgraph import connected_components
 
 from .constants import DEGENERATE_FACE_TOL
 from .errors import MeshError
-from .topology import corner_edges, edge_topology, unique_rows
+from .topology import corner_edges, corner_fans, edge_topology, unique_rows
 
 __all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays"]
 
@@ -263,22 +261,8 @@ def _nonmanifold_vertices(F: np.ndarray, topo) -> np.ndarray:
     Corners ``(f, v)`` are nodes; two corners of the same vertex are joined when their faces
     share an interior edge through that vertex.  A manifold vertex has one component of corners.
     """
-    m = F.shape[0]
     n = int(F.max()) + 1
-    inner = np.flatnonzero(topo.interior)
-    f0, f1 = topo.EF[inner, 0], topo.EF[inner, 1]
-    rows, cols = [], []
-    for k in range(2):
-        v = topo.E[inner, k]
-        # corner index of v in f0 and in f1: node id = j*m + f
-        j0 = np.argmax(F[f0] == v[:, None], axis=1)
-        j1 = np.argmax(F[f1] == v[:, None], axis=1)
-        rows.append(j0 * m + f0)
-        cols.append(j1 * m + f1)
-    rows = np.concatenate(rows)
-    cols = np.concatenate(cols)
-    A = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m))
-    _, comp = connected_components(A, directed=False)
+    _, comp = corner_fans(F, topo)
     corner_vertex = F.T.ravel()  # node j*m+f -> F[f, j]
     pairs = unique_rows(np.stack([corner_vertex, comp], axis=1))
     fans = np.bincount(pairs[:, 0], minlength=n)

@@ -41,7 +41,7 @@ from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
 from .checks import as_mesh_arrays
 from .errors import MeshError
-from .topology import EdgeTopology, corner_edges, edge_topology, face_components
+from .topology import EdgeTopology, corner_edges, corner_fans, edge_topology, face_components
 
 __all__ = [
     "ChartTopology",
@@ -218,19 +218,7 @@ def _open(F: np.ndarray, topo: EdgeTopology, cut: np.ndarray) -> tuple[np.ndarra
         comes back unchanged); extra wedges are appended.
     """
     m = F.shape[0]
-    inner = np.flatnonzero(topo.interior & ~cut)
-    f0, f1 = topo.EF[inner, 0], topo.EF[inner, 1]
-    rows, cols = [], []
-    for k in range(2):
-        v = topo.E[inner, k]
-        j0 = np.argmax(F[f0] == v[:, None], axis=1)
-        j1 = np.argmax(F[f1] == v[:, None], axis=1)
-        rows.append(j0 * m + f0)
-        cols.append(j1 * m + f1)
-    rows = np.concatenate(rows)
-    cols = np.concatenate(cols)
-    A = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m))
-    ncomp, comp = connected_components(A, directed=False)
+    ncomp, comp = corner_fans(F, topo, joined=~cut)
     corner_vertex = F.T.ravel()  # node j*m + f -> F[f, j]
     comp_vertex = np.empty(ncomp, dtype=np.int64)
     comp_vertex[comp] = corner_vertex

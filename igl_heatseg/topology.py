@@ -20,6 +20,7 @@ __all__ = [
     "unique_rows",
     "corner_edges",
     "edge_topology",
+    "corner_fans",
     "face_adjacency",
     "face_components",
     "vertex_components",
@@ -165,6 +166,50 @@ def edge_topology(F: np.ndarray) -> EdgeTopology:
     )
 
 
+def corner_fans(
+    F: np.ndarray, topo: EdgeTopology | None = None, joined: np.ndarray | None = None
+) -> tuple[int, np.ndarray]:
+    """Fans of face corners around each vertex.
+
+    Corners ``(f, j)`` (node ``j*m + f``, vertex ``F[f, j]``) are joined when their faces share
+    an interior edge through that vertex.  Around a manifold vertex all corners form one fan;
+    a vertex with several fans is non-manifold (or, with ``joined`` excluding cut edges, is
+    split into one wedge per fan when the mesh is opened along the cut).
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    topo : EdgeTopology, optional
+        Precomputed ``edge_topology(F)``.
+    joined : (ne,) bool, optional
+        Interior edges across which corners are joined (default: all interior edges).
+
+    Returns
+    -------
+    count : int
+        Number of fans.
+    fan : (3*m,) int64
+        Fan id of corner node ``j*m + f``.
+    """
+    topo = edge_topology(F) if topo is None else topo
+    m = F.shape[0]
+    keep = topo.interior if joined is None else (topo.interior & joined)
+    inner = np.flatnonzero(keep)
+    f0, f1 = topo.EF[inner, 0], topo.EF[inner, 1]
+    rows, cols = [], []
+    for k in range(2):
+        v = topo.E[inner, k]
+        j0 = np.argmax(F[f0] == v[:, None], axis=1)  # corner of v in f0
+        j1 = np.argmax(F[f1] == v[:, None], axis=1)
+        rows.append(j0 * m + f0)
+        cols.append(j1 * m + f1)
+    rows = np.concatenate(rows)
+    cols = np.concatenate(cols)
+    A = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(3 * m, 3 * m))
+    count, fan = connected_components(A, directed=False)
+    return int(count), fan.astype(np.int64)
+
+
 def face_adjacency(F: np.ndarray, topo: EdgeTopology | None = None) -> sp.csr_matrix:
     """Face-face adjacency through shared (manifold) edges.
 
@@ -231,7 +276,7 @@ def boundary_loops(F: np.ndarray) -> list[np.ndarray]:
     bd = D[counts[inv.reshape(-1)] == 1]
     if len(bd) == 0:
         return []
-    nxt = dict(zip(bd[:, 0].tolist(), bd[:, 1].tolist()))
+    nxt = dict(zip(bd[:, 0].tolist(), bd[:, 1].tolist(), strict=True))
     # A vertex with two outgoing boundary half-edges (pinched boundary) cannot be in a
     # validated mesh; the dict keeps one of them and the walk still terminates.
     seen: set[int] = set()

@@ -123,7 +123,9 @@ def seed_mask(
     return mask
 
 
-def seed_groups(F: np.ndarray, mask: np.ndarray, E: np.ndarray | None = None) -> tuple[int, np.ndarray]:
+def seed_groups(
+    F: np.ndarray, mask: np.ndarray, E: np.ndarray | None = None
+) -> tuple[int, np.ndarray]:
     """Connected components of the seed vertices through edges with both ends seeds.
 
     Parameters

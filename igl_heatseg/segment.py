@@ -230,7 +230,9 @@ def segment_mesh(
     k0 = k_seed + len(seedless)
     area = face_areas(V, F)
     timings["seeds"] = time.perf_counter() - t
-    log.info("%d seed vertices in %d groups (%d seedless components)", mask.sum(), k0, len(seedless))
+    log.info(
+        "%d seed vertices in %d groups (%d seedless components)", mask.sum(), k0, len(seedless)
+    )
 
     t = time.perf_counter()
     L = igl.cotmatrix(V, F)
@@ -373,7 +375,7 @@ def make_face_connected(
     elen = np.linalg.norm(V[topo.E[inner[diff], 0]] - V[topo.E[inner[diff], 1]], axis=1)
     pa, pb = piece[f0[diff]], piece[f1[diff]]
     nbrs: list[dict[int, float]] = [dict() for _ in range(npieces)]
-    for a, b, ln in zip(pa.tolist(), pb.tolist(), elen.tolist()):
+    for a, b, ln in zip(pa.tolist(), pb.tolist(), elen.tolist(), strict=True):
         if a != b:
             nbrs[a][b] = nbrs[a].get(b, 0.0) + ln
             nbrs[b][a] = nbrs[b].get(a, 0.0) + ln

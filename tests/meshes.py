@@ -39,13 +39,21 @@ def cube(n: int = 6):
     return m.V, m.F
 
 
-def cylinder(n_around: int = 64, n_height: int = 8, radius: float = 1.0, height: float = 2.0,
-             caps: bool = True):
+def cylinder(
+    n_around: int = 64,
+    n_height: int = 8,
+    radius: float = 1.0,
+    height: float = 2.0,
+    caps: bool = True,
+):
     """Cylinder along z; side (n_around x n_height quads), optional fan caps."""
     t = np.linspace(0, 2 * np.pi, n_around, endpoint=False)
     z = np.linspace(0, height, n_height + 1)
-    V = np.c_[np.tile(radius * np.cos(t), len(z)), np.tile(radius * np.sin(t), len(z)),
-              np.repeat(z, n_around)]
+    V = np.c_[
+        np.tile(radius * np.cos(t), len(z)),
+        np.tile(radius * np.sin(t), len(z)),
+        np.repeat(z, n_around),
+    ]
     idx = np.arange(len(V)).reshape(len(z), n_around)
     a = idx[:-1].ravel()
     b = np.roll(idx[:-1], -1, axis=1).ravel()

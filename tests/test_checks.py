@@ -60,7 +60,9 @@ def test_out_of_range_and_negative_indices_name_the_faces():
 def test_nonfinite_coordinates_name_the_vertex(bad):
     V, F = grid(2, 2)
     V[4, 1] = bad
-    with pytest.raises(MeshError, match=r"1 vertex\(es\) have NaN or infinite coordinates: vertex 4"):
+    with pytest.raises(
+        MeshError, match=r"1 vertex\(es\) have NaN or infinite coordinates: vertex 4"
+    ):
         validate_mesh(V, F)
 
 
@@ -102,7 +104,9 @@ def test_inconsistent_orientation_names_edge_and_faces():
     V, F = grid(2, 1)
     F = F.copy()
     F[0] = F[0, ::-1]
-    with pytest.raises(MeshError, match=r"inconsistent orientation on 2 edge\(s\).*between faces 0 and"):
+    with pytest.raises(
+        MeshError, match=r"inconsistent orientation on 2 edge\(s\).*between faces 0 and"
+    ):
         validate_mesh(V, F)
     assert validate_mesh(V, F, check_orientation=False).F.shape == F.shape
 

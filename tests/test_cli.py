@@ -15,8 +15,19 @@ def test_segment_writes_all_outputs(tmp_path, data_dir, capsys):
     labels = np.loadtxt(out / "labels.txt", dtype=int)
     vlabels = np.loadtxt(out / "vertex_labels.txt", dtype=int)
     rep = json.loads((out / "report.json").read_text())
-    for key in ("faces", "vertices", "components", "theta", "eps", "seed_vertices",
-                "initial_groups", "segments", "segment_areas", "merged_islands", "timings"):
+    for key in (
+        "faces",
+        "vertices",
+        "components",
+        "theta",
+        "eps",
+        "seed_vertices",
+        "initial_groups",
+        "segments",
+        "segment_areas",
+        "merged_islands",
+        "timings",
+    ):
         assert key in rep, key
     assert rep["faces"] == len(labels) == 14454 and rep["vertices"] == len(vlabels) == 7229
     assert rep["segments"] == labels.max() + 1 == len(rep["segment_areas"])
@@ -68,10 +79,16 @@ def test_labels_follow_input_order_with_unreferenced_and_duplicate_vertices(tmp_
             "nm.obj",
             "non-manifold edge",
         ),
-        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n", "nv.obj",
-         "non-manifold vertex"),
-        (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n", "o.obj",
-         "inconsistent orientation"),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv -1 0 0\nv 0 -1 0\nf 1 2 3\nf 1 4 5\n",
+            "nv.obj",
+            "non-manifold vertex",
+        ),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 4 3\n",
+            "o.obj",
+            "inconsistent orientation",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, content, name, needle):
@@ -80,7 +97,9 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, content, name, needle):
         p.write_bytes(content)
     r = subprocess.run(
         [sys.executable, "-m", "igl_heatseg", "segment", str(p), "-o", str(tmp_path / "o")],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert r.returncode == 2, r.stderr
     err = r.stderr.strip()
@@ -109,15 +128,27 @@ def test_progress_lines_when_not_a_tty():
 
 def test_progress_appears_for_large_meshes(tmp_path, data_dir):
     r = subprocess.run(
-        [sys.executable, "-m", "igl_heatseg", "segment", str(data_dir / "fandisk.off"),
-         "-o", str(tmp_path / "o"), "--progress", "always"],
-        capture_output=True, text=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "igl_heatseg",
+            "segment",
+            str(data_dir / "fandisk.off"),
+            "-o",
+            str(tmp_path / "o"),
+            "--progress",
+            "always",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert r.returncode == 0
     assert "heat initial: 100%" in r.stderr
 
 
 def test_help_lists_segment():
-    r = subprocess.run([sys.executable, "-m", "igl_heatseg", "--help"], capture_output=True,
-                       text=True, timeout=60)
+    r = subprocess.run(
+        [sys.executable, "-m", "igl_heatseg", "--help"], capture_output=True, text=True, timeout=60
+    )
     assert r.returncode == 0 and "segment" in r.stdout

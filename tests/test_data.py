@@ -1,7 +1,5 @@
 """Every shipped data file is credited, and every mesh loads."""
 
-import pytest
-
 from igl_heatseg.io import SUPPORTED_EXTENSIONS, load_mesh
 
 

@@ -1,9 +1,9 @@
+import igl
 import numpy as np
 import pytest
 import scipy.sparse.linalg as sla
 from meshes import cylinder, grid, sphere
 
-import igl
 from igl_heatseg.heat import HeatSolver, heat_fields
 from igl_heatseg.seeds import seed_groups, seed_mask
 

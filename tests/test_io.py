@@ -50,7 +50,10 @@ def _stl_ascii(V, F):
     s = "solid test\n"
     for f in F:
         s += "facet normal 0 0 0\nouter loop\n"
-        s += "".join(f"vertex {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V[f]) + "endloop\nendfacet\n"
+        s += (
+            "".join(f"vertex {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V[f])
+            + "endloop\nendfacet\n"
+        )
     return s + "endsolid test\n"
 
 
@@ -132,7 +135,9 @@ def test_off_truncated_and_garbage(tmp_path):
     text = _off(V, F)
     assert "truncated" in _err(tmp_path, "t.off", text[: len(text) // 2].encode())
     assert "not an OFF file" in _err(tmp_path, "g.off", b"hello world\n1 2 3\n")
-    assert "'x' is not a number" in _err(tmp_path, "n.off", b"OFF\n3 1 0\n0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n")
+    assert "'x' is not a number" in _err(
+        tmp_path, "n.off", b"OFF\n3 1 0\n0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n"
+    )
 
 
 def test_non_triangles_are_refused(tmp_path):
@@ -199,7 +204,9 @@ def test_cli_hang_case_returns_quickly(tmp_path):
     p.write_bytes(b"OFF\n99999999 1 0\n0 0 0\n")
     r = subprocess.run(
         [sys.executable, "-m", "igl_heatseg", "segment", str(p), "-o", str(tmp_path / "o")],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert r.returncode == 2
     assert r.stderr.strip().count("\n") == 0 and "Traceback" not in r.stderr

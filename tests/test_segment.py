@@ -125,9 +125,7 @@ def test_invariants_on_real_meshes(real):
     assert s.labels.shape == (len(m.F),) and s.labels.min() == 0
     assert np.array_equal(np.unique(s.labels), np.arange(k))
     assert np.all(np.diff(s.segment_areas) <= 0)
-    np.testing.assert_allclose(
-        np.bincount(s.labels, weights=face_areas(m.V, m.F)), s.segment_areas
-    )
+    np.testing.assert_allclose(np.bincount(s.labels, weights=face_areas(m.V, m.F)), s.segment_areas)
     # segments face-connected
     A = face_adjacency(m.F).tocoo()
     same = s.labels[A.row] == s.labels[A.col]

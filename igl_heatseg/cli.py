@@ -134,6 +134,11 @@ def write_segmentation(
         "merged_islands_initial": seg.merged_islands_initial,
         "heat_sum_error": seg.heat_sum_error,
     }
+    types = getattr(seg, "primitive_types", None)
+    report["mode"] = "robust" if types is not None else "paper"
+    if types is not None:
+        report["primitive_types"] = list(types)
+        report["primitive_rms"] = seg.primitive_rms
     report.update(extra or {})
     timings = dict(report.pop("timings", {}))
     timings.update(seg.timings)
@@ -147,7 +152,7 @@ def write_segmentation(
 
 def _cmd_segment(args: argparse.Namespace) -> int:
     from .io import load_mesh
-    from .segment import segment_mesh
+    from .segment import segment_with_mode
 
     t0 = time.perf_counter()
     progress = Progress(enabled=False)
@@ -159,8 +164,8 @@ def _cmd_segment(args: argparse.Namespace) -> int:
     if args.progress == "auto":
         progress.enabled = mesh.F.shape[0] >= PROGRESS_MIN_FACES
     progress("loading", 1.0)
-    seg = segment_mesh(
-        mesh, args.theta, args.eps, progress=progress, keep_solvers=False, solver=args.solver
+    seg = segment_with_mode(
+        mesh, args.mode, args.theta, args.eps, progress=progress, solver=args.solver
     )
     out = Path(args.out)
     extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
@@ -175,22 +180,39 @@ def _cmd_segment(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_segment_arguments(p: argparse.ArgumentParser) -> None:
-    """Add ``--theta`` and ``--eps`` (the paper's two knobs) to a subparser."""
+def add_segment_arguments(p: argparse.ArgumentParser, with_mode: bool = False) -> None:
+    """Add ``--theta`` and ``--eps`` (the paper's two knobs) to a subparser.
+
+    With ``with_mode``, also ``--mode paper|robust``; ``--theta``/``--eps`` then default to
+    ``None`` (each mode's own default, see :func:`igl_heatseg.segment.segment_with_mode`).
+    """
+    from .robust import ROBUST_EPS, ROBUST_THETA
+
     p.add_argument(
         "--theta",
         type=float,
-        default=THETA_DEFAULT,
+        default=None if with_mode else THETA_DEFAULT,
         help=f"dihedral threshold in radians; an interior edge whose face normals differ by more "
-        f"is sharp (default pi/20 = {THETA_DEFAULT:.4f})",
+        f"is sharp (default pi/20 = {THETA_DEFAULT:.4f}"
+        + (f"; robust mode: {ROBUST_THETA} on denoised normals)" if with_mode else ")"),
     )
     p.add_argument(
         "--eps",
         type=float,
-        default=EPS_DEFAULT,
+        default=None if with_mode else EPS_DEFAULT,
         help="area fraction: initial segments smaller than eps x the largest lose their seeds "
-        f"(default {EPS_DEFAULT})",
+        f"(default {EPS_DEFAULT}"
+        + (f"; robust mode: {ROBUST_EPS} x the part's area)" if with_mode else ")"),
     )
+    if with_mode:
+        p.add_argument(
+            "--mode",
+            choices=("paper", "robust"),
+            default="paper",
+            help="paper: the paper's method, faithful (default); robust: denoised normals, "
+            "curvature-class seeds, part-relative eps and primitive merging, for noisy scans "
+            "and blends (adds a primitive type per segment to report.json)",
+        )
 
 
 def add_solver_argument(p: argparse.ArgumentParser) -> None:
@@ -222,7 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("mesh", help="input mesh file")
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
-    add_segment_arguments(p)
+    add_segment_arguments(p, with_mode=True)
     add_solver_argument(p)
     p.add_argument(
         "--progress",

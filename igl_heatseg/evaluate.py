@@ -785,14 +785,10 @@ def _run(args) -> int:
             if pred_path.is_dir():
                 pred_path = pred_path / "labels.txt"
             pred = read_labels(pred_path, m)
-        elif args.mode == "robust":
-            from .robust import segment_robust
-
-            pred = segment_robust(mesh).labels
         else:
-            from .segment import segment_mesh
+            from .segment import segment_with_mode
 
-            pred = segment_mesh(mesh, keep_solvers=False).labels
+            pred = segment_with_mode(mesh, args.mode).labels
         ev = evaluate_labels(mesh.V, mesh.F, pred, truths, weighting=args.weighting)
     except MeshError as exc:
         sys.stderr.write(f"igl-heatseg evaluate: error: {exc}\n")

@@ -2,7 +2,7 @@
 
 ``igl-heatseg run MESH -o DIR`` (:func:`register`) and :func:`run_pipeline` do
 
-1. :func:`igl_heatseg.segment.segment_mesh` (paper §3.1-3.4);
+1. :func:`igl_heatseg.segment.segment_with_mode` (the paper's §3.1-3.4, or robust mode);
 2. one chart per face-connected piece of each segment; user cut paths (paper §3.5: the ends of
    a generatrix, vertex ids of the *input* mesh) are assigned to the chart holding both ends
    and cut with :func:`igl_heatseg.cut.cut_along_paths`; with ``cut="auto"`` every chart that
@@ -194,8 +194,8 @@ def _compose(first: CutResult, second: CutResult) -> CutResult:
 def run_pipeline(
     mesh: CleanMesh,
     out_dir: str | Path | None = None,
-    theta: float = THETA_DEFAULT,
-    eps: float = EPS_DEFAULT,
+    theta: float | None = THETA_DEFAULT,
+    eps: float | None = EPS_DEFAULT,
     energy: Literal["auto", "hlle", "curved"] = "auto",
     cut: Literal["auto", "none"] = "auto",
     cut_paths: Sequence[tuple[int, int]] = (),
@@ -207,6 +207,7 @@ def run_pipeline(
     t_start: float | None = None,
     pictures: bool = False,
     solver: str = "fast",
+    mode: str = "paper",
 ) -> PipelineResult:
     """Segment, cut, parameterize, pack and (optionally) write a mesh.
 
@@ -243,6 +244,9 @@ def run_pipeline(
         an OpenGL context is missing).
     solver : {"fast", "exact"}
         Heat solver for the segmentation (see :func:`igl_heatseg.segment.segment_mesh`).
+    mode : {"paper", "robust"}
+        Segmentation mode (:func:`igl_heatseg.segment.segment_with_mode`); ``theta``/``eps``
+        ``None`` take the mode's defaults.
 
     Returns
     -------
@@ -254,7 +258,7 @@ def run_pipeline(
         Bad parameters or cut-path vertex ids (named).
     """
     from .param import parameterize_chart
-    from .segment import segment_mesh
+    from .segment import segment_with_mode
 
     if cut not in ("auto", "none"):
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
@@ -263,7 +267,7 @@ def run_pipeline(
     t0 = time.perf_counter() if t_start is None else t_start
     _check_cut_paths(mesh, cut_paths)  # before the (long) segmentation
     progress = progress or (lambda stage, fraction=1.0: None)
-    seg = segment_mesh(mesh, theta, eps, progress=progress, keep_solvers=False, solver=solver)
+    seg = segment_with_mode(mesh, mode, theta, eps, progress=progress, solver=solver)
     V, F = mesh.V, mesh.F
     m = F.shape[0]
     areas = _face_areas(V, F)
@@ -475,6 +479,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         theta=args.theta,
         eps=args.eps,
         solver=args.solver,
+        mode=args.mode,
         energy=args.energy,
         cut=args.cut,
         cut_paths=args.cut_path or [],
@@ -520,7 +525,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("mesh", help="input mesh file")
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
-    add_segment_arguments(p)
+    add_segment_arguments(p, with_mode=True)
     add_solver_argument(p)
     p.add_argument(
         "--energy",

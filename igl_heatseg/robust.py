@@ -29,8 +29,9 @@ Pipeline of :func:`segment_robust`:
    ``axis_angle`` (so two fillets along different box edges, or a hub and its torus fillet,
    stay apart) and, for flat vertices, normals within ``flat_normal_angle`` (a large-radius
    fillet that turns too little per edge to count as curved is still cut from its plane).
-4. **Heat** (the paper's fields, :class:`igl_heatseg.heat.HeatSolver`) on the denoised surface,
-   argmax labels, islands merged (:func:`igl_heatseg.segment.make_face_connected`).
+4. **Heat** (the paper's fields, :class:`igl_heatseg.fastheat.FastHeatSolver`) on the
+   denoised surface, argmax labels, islands merged
+   (:func:`igl_heatseg.segment.make_face_connected`).
 5. **Area threshold relative to the part**: groups whose segment is smaller than
    ``eps * (area of their component)`` lose their seeds (the largest group of a component is
    always kept), and step 4 runs again.  The paper compares with the largest segment, which on
@@ -55,8 +56,8 @@ from scipy.sparse.csgraph import connected_components
 
 from .checks import CleanMesh
 from .errors import MeshError
-from .heat import HeatSolver
-from .segment import Segmentation, face_areas, make_face_connected
+from .fastheat import FastHeatSolver
+from .segment import Segmentation, face_areas, final_numbering, make_face_connected
 from .topology import edge_topology, vertex_components
 
 __all__ = [
@@ -620,7 +621,7 @@ def _expand_into_band(group: np.ndarray, band: np.ndarray, E: np.ndarray, rings:
 
 
 def _heat_round(W, F, group, L, area, topo):
-    solver = HeatSolver(W, F, group, L)
+    solver = FastHeatSolver(W, F, group, L)
     hl = solver.labels()
     labels, merged = make_face_connected(W, F, hl.face_labels, group, area, topo)
     return labels, merged, hl
@@ -786,19 +787,9 @@ def segment_robust(
         tol = (MERGE_TOL + MERGE_NOISE * noise_angle) * h
         labels1, merged_primitives = merge_by_primitives(W, F, labels1, tol, topo=topo)
         timings["merge"] = time.perf_counter() - t
-    area = face_areas(V, F)
-    areas1 = np.bincount(labels1, weights=area, minlength=k1)
-    nonempty = np.flatnonzero(np.bincount(labels1, minlength=k1) > 0)
-    order = nonempty[np.lexsort((nonempty, -areas1[nonempty]))]
-    final_of_group = np.full(k1, -1, dtype=np.int64)
-    final_of_group[order] = np.arange(len(order))
-    labels = final_of_group[labels1]
-    vertex_labels = final_of_group[hl1.vertex_labels]
-    orphans = np.flatnonzero(vertex_labels < 0)
-    if len(orphans):
-        vf = np.full(n, -1, dtype=np.int64)
-        vf[F.ravel()] = np.repeat(labels, 3)
-        vertex_labels[orphans] = vf[orphans]
+    labels, vertex_labels, segment_areas, order = final_numbering(
+        F, labels1, hl1.vertex_labels, face_areas(V, F), k1
+    )
 
     t = time.perf_counter()
     diag = float(np.linalg.norm(W.max(axis=0) - W.min(axis=0)))
@@ -813,7 +804,7 @@ def segment_robust(
     return RobustSegmentation(
         labels=labels,
         vertex_labels=vertex_labels,
-        segment_areas=areas1[order],
+        segment_areas=segment_areas,
         seed_mask=group0 >= 0,
         sharp_edges=E[sharp],
         seed_group=group0,

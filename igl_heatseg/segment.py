@@ -34,6 +34,9 @@ from .seeds import dihedral_deviation, seed_groups, sharp_edges
 from .topology import EdgeTopology, edge_topology, vertex_components
 
 __all__ = [
+    "MODES",
+    "segment_with_mode",
+    "final_numbering",
     "Segmentation",
     "segment_mesh",
     "segment",
@@ -261,26 +264,14 @@ def segment_mesh(
         labels1, solver1, merged1, hl1 = _heat_round(
             V, F, group1, L, area, topo, timings, "final", progress, solver_cls
         )
-    k1 = len(kept)
-
-    # Final numbering: non-empty groups by decreasing area (ties: lower group id first).
-    areas1 = np.bincount(labels1, weights=area, minlength=k1)
-    nonempty = np.flatnonzero(np.bincount(labels1, minlength=k1) > 0)
-    order = nonempty[np.lexsort((nonempty, -areas1[nonempty]))]
-    final_of_group = np.full(k1, -1, dtype=np.int64)
-    final_of_group[order] = np.arange(len(order))
-    labels = final_of_group[labels1]
-    vertex_labels = final_of_group[hl1.vertex_labels]
-    orphans = np.flatnonzero(vertex_labels < 0)
-    if len(orphans):  # vertex argmax names a group that ended with no face: use a face's label
-        vf = np.full(n, -1, dtype=np.int64)
-        vf[F.ravel()] = np.repeat(labels, 3)
-        vertex_labels[orphans] = vf[orphans]
+    labels, vertex_labels, segment_areas, order = final_numbering(
+        F, labels1, hl1.vertex_labels, area, len(kept)
+    )
 
     return Segmentation(
         labels=labels,
         vertex_labels=vertex_labels,
-        segment_areas=areas1[order],
+        segment_areas=segment_areas,
         seed_mask=mask,
         sharp_edges=E[sharp],
         seed_group=group0,
@@ -299,6 +290,49 @@ def segment_mesh(
         timings=timings,
         _solvers=(solver0, solver1) if keep_solvers else (None, None),
     )
+
+
+def final_numbering(
+    F: np.ndarray, labels: np.ndarray, vertex_labels: np.ndarray, area: np.ndarray, k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Renumber group labels ``0..k-1`` as final segments: non-empty ones, largest area first.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+        Face labels as group ids ``0..k-1``.
+    vertex_labels : (n,) int64
+        Vertex argmax labels as group ids.
+    area : (m,) float64
+        Face areas.
+    k : int
+        Number of groups.
+
+    Returns
+    -------
+    labels : (m,) int64
+        ``0..s-1``, segment 0 the largest; ties go to the lower group id.
+    vertex_labels : (n,) int64
+        Same numbering; a vertex whose group ended with no face takes an incident face's label.
+    segment_areas : (s,) float64
+        Decreasing.
+    order : (s,) int64
+        Group id of each segment.
+    """
+    areas = np.bincount(labels, weights=area, minlength=k)
+    nonempty = np.flatnonzero(np.bincount(labels, minlength=k) > 0)
+    order = nonempty[np.lexsort((nonempty, -areas[nonempty]))]
+    final_of_group = np.full(k, -1, dtype=np.int64)
+    final_of_group[order] = np.arange(len(order))
+    out = final_of_group[labels]
+    vout = final_of_group[vertex_labels]
+    orphans = np.flatnonzero(vout < 0)
+    if len(orphans):
+        vf = np.full(len(vout), -1, dtype=np.int64)
+        vf[F.ravel()] = np.repeat(out, 3)
+        vout[orphans] = vf[orphans]
+    return out, vout, areas[order], order
 
 
 def _heat_round(V, F, group, L, area, topo, timings, stage, progress, solver_cls=FastHeatSolver):
@@ -415,6 +449,63 @@ def make_face_connected(
             break
         root = nxt
     return plabel[root][piece], merged
+
+
+#: Segmentation modes: the paper's (default, faithful) and robust mode (noise, blends).
+MODES = ("paper", "robust")
+
+
+def segment_with_mode(
+    mesh: CleanMesh,
+    mode: str = "paper",
+    theta: float | None = None,
+    eps: float | None = None,
+    *,
+    progress: Progress | None = None,
+    solver: str = "fast",
+    keep_solvers: bool = False,
+) -> Segmentation:
+    """Segment in the paper's mode or in robust mode, with each mode's own defaults.
+
+    Parameters
+    ----------
+    mesh : CleanMesh
+    mode : {"paper", "robust"}
+        ``"paper"``: :func:`segment_mesh`.  ``"robust"``:
+        :func:`igl_heatseg.robust.segment_robust` (denoised normals, curvature-class seeds,
+        part-relative eps, primitive merging; returns a ``RobustSegmentation`` with
+        ``primitive_types``).
+    theta, eps : float, optional
+        ``None`` takes the mode's default (paper: pi/20 and 0.05; robust:
+        ``ROBUST_THETA`` and ``ROBUST_EPS``).
+    progress, solver, keep_solvers
+        Passed to :func:`segment_mesh` (paper mode only).
+
+    Returns
+    -------
+    Segmentation
+
+    Raises
+    ------
+    ValueError
+        Unknown mode, or parameters out of range.
+    """
+    if mode == "paper":
+        return segment_mesh(
+            mesh,
+            THETA_DEFAULT if theta is None else theta,
+            EPS_DEFAULT if eps is None else eps,
+            progress=progress,
+            solver=solver,
+            keep_solvers=keep_solvers,
+        )
+    if mode == "robust":
+        from .robust import ROBUST_EPS, ROBUST_THETA, segment_robust
+
+        return segment_robust(
+            mesh, ROBUST_THETA if theta is None else theta, ROBUST_EPS if eps is None else eps
+        )
+    raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
 
 
 def segment(

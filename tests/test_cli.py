@@ -152,3 +152,39 @@ def test_help_lists_segment():
         [sys.executable, "-m", "igl_heatseg", "--help"], capture_output=True, text=True, timeout=60
     )
     assert r.returncode == 0 and "segment" in r.stdout
+
+
+def test_segment_robust_mode_reports_primitives_and_scores_better(tmp_path, data_dir):
+    from igl_heatseg.evaluate import coverage, purity, read_labels
+
+    mesh = data_dir / "abc_00007974_5.ply"
+    truth = read_labels(data_dir / "abc_00007974_5.facelabels.txt")
+    area = load_mesh(mesh)
+    from igl_heatseg.segment import face_areas
+
+    w = face_areas(area.V, area.F)
+    scores = {}
+    for mode in ("paper", "robust"):
+        out = tmp_path / mode
+        assert main(["segment", str(mesh), "-o", str(out), "--mode", mode]) == 0
+        rep = json.loads((out / "report.json").read_text())
+        assert rep["mode"] == mode
+        labels = np.loadtxt(out / "labels.txt", dtype=int)
+        scores[mode] = (purity(labels, truth, w), coverage(labels, truth, w))
+        if mode == "robust":
+            assert len(rep["primitive_types"]) == rep["segments"]
+            assert set(rep["primitive_types"]) <= {"Plane", "Cylinder", "Sphere", "Other"}
+            assert rep["theta"] == 0.7
+    # the paper's mode merges this thin frame into 2 segments (24 true faces)
+    assert scores["paper"][0] < 0.8
+    assert scores["robust"][0] >= 0.9 and scores["robust"][1] >= 0.85
+
+
+def test_unknown_mode_is_rejected():
+    from meshes import cube
+
+    from igl_heatseg import validate_mesh
+    from igl_heatseg.segment import segment_with_mode
+
+    with pytest.raises(ValueError, match="mode must be one of"):
+        segment_with_mode(validate_mesh(*cube(2)), "fancy")

@@ -258,9 +258,7 @@ def _grid_candidate_pairs(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return np.stack([key // nb, key % nb], axis=1)
 
 
-def boundary_self_intersections(
-    UV: np.ndarray, edges: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def boundary_self_intersections(UV: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Intersecting pairs among the images of a set of boundary edges.
 
     Non-adjacent edges (no shared vertex id) intersect when their closed image segments share

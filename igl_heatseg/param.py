@@ -280,12 +280,15 @@ def _lowest_eigenpairs(
         return lam[:k], Y[:, :k]
     M = sp.diags(m).tocsc()
     A = (K + EIGEN_SHIFT * M).tocsc()
-    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0 if psd else 0.1,
-                   options={"SymmetricMode": True})
+    lu = spla.splu(
+        A,
+        permc_spec="MMD_AT_PLUS_A",
+        diag_pivot_thresh=0.0 if psd else 0.1,
+        options={"SymmetricMode": True},
+    )
     OP = spla.LinearOperator((n, n), matvec=lu.solve, dtype=np.float64)
     try:
-        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP,
-                            tol=0.0)
+        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP, tol=0.0)
     except (RuntimeError, spla.ArpackNoConvergence) as exc:
         log.warning("eigsh failed (%s); retrying with LOBPCG", exc)
         X0 = np.random.default_rng(0).standard_normal((n, k))
@@ -471,14 +474,20 @@ def _mean_value_laplacian(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
         rows += [i, i]
         cols += [j, k]
         vals += [t / np.maximum(lij, 1e-300), t / np.maximum(lik, 1e-300)]
-    W = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(n, n))
+    W = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    )
     return (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
 
 
 def repair_map(
-    UV: np.ndarray, V: np.ndarray, F: np.ndarray, cert: Certificate, name: str = "chart",
-    rounds: int = REPAIR_ROUNDS, max_fraction: float = REPAIR_MAX_FRACTION,
+    UV: np.ndarray,
+    V: np.ndarray,
+    F: np.ndarray,
+    cert: Certificate,
+    name: str = "chart",
+    rounds: int = REPAIR_ROUNDS,
+    max_fraction: float = REPAIR_MAX_FRACTION,
 ) -> tuple[np.ndarray, Certificate, int]:
     """Untangle a map with a few local flips by re-solving a small region harmonically.
 
@@ -512,8 +521,9 @@ def repair_map(
     if cert.bijective or cert.overlaps > 0:
         return UV, cert, 0
     E = _edges(F)
-    A = sp.csr_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
-                      shape=(n, n))
+    A = sp.csr_matrix(
+        (np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n)
+    )
     L = _mean_value_laplacian(V, F)
     free = np.zeros(n, dtype=bool)
     free[F[np.r_[cert.flipped_faces, cert.degenerate_faces]].ravel()] = True
@@ -557,15 +567,20 @@ def _slim_data(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, b=None, bc=None, e
     )
 
 
-def _slim(V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int,
-          energy=None) -> np.ndarray:
+def _slim(
+    V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int, energy=None
+) -> np.ndarray:
     """SLIM (libigl) from a flip-free start, free boundary, no certificate."""
     data = _slim_data(V, F, UV0, energy=energy)
     return np.ascontiguousarray(igl.slim_solve(data, iterations)[:, :2])
 
 
 def _slim_guarded(
-    V: np.ndarray, F: np.ndarray, UV0: np.ndarray, iterations: int, name: str,
+    V: np.ndarray,
+    F: np.ndarray,
+    UV0: np.ndarray,
+    iterations: int,
+    name: str,
     bnd: np.ndarray | None = None,
 ) -> tuple[np.ndarray, Certificate | None, int]:
     """SLIM one iteration at a time from a bijective start; keep the last bijective iterate.
@@ -884,14 +899,26 @@ def parameterize_chart(
             ok = False
         if ok:
             UVh, cert_h = _finish(UVh, Vn, Fc, name)
-            attempts.append({"method": meth, **cert_h.summary(), "null_dim": null_dim,
-                             "seconds": time.perf_counter() - t})
+            attempts.append(
+                {
+                    "method": meth,
+                    **cert_h.summary(),
+                    "null_dim": null_dim,
+                    "seconds": time.perf_counter() - t,
+                }
+            )
             tries.append((UVh, cert_h, meth, lam_h))
             if cert_h.bijective:
                 break
         else:
-            attempts.append({"method": meth, "bijective": False, "error": "eigen-solve failed",
-                             "seconds": time.perf_counter() - t})
+            attempts.append(
+                {
+                    "method": meth,
+                    "bijective": False,
+                    "error": "eigen-solve failed",
+                    "seconds": time.perf_counter() - t,
+                }
+            )
     if tries:
         # The bijective one, else the one that is easiest to repair (no overlaps, fewest
         # local defects).
@@ -906,9 +933,17 @@ def parameterize_chart(
     if (cert is None or not cert.bijective) and fallback != "none":
         used_fallback = True
         if cert is not None:
-            log.info("%s: %s not bijective (flips %d, overlaps %d, degenerate %d, wound %d); "
-                     "falling back to %s", name, method, cert.flips, cert.overlaps,
-                     cert.degenerate, cert.wound, fallback)
+            log.info(
+                "%s: %s not bijective (flips %d, overlaps %d, degenerate %d, wound %d); "
+                "falling back to %s",
+                name,
+                method,
+                cert.flips,
+                cert.overlaps,
+                cert.degenerate,
+                cert.wound,
+                fallback,
+            )
         repaired = False
         if repair and cert is not None and cert.overlaps == 0:
             t = time.perf_counter()
@@ -916,9 +951,16 @@ def parameterize_chart(
             sd0 = distortion(Vn, Fc, UVc)["sym_dirichlet"]
             sd1 = distortion(Vn, Fc, UVr)["sym_dirichlet"]
             keep = cert_r.bijective and sd1 <= REPAIR_MAX_SD_RATIO * sd0
-            attempts.append({"method": f"{method}+repair", "rounds": rounds, **cert_r.summary(),
-                             "sym_dirichlet_ratio": float(sd1 / sd0) if sd0 > 0 else None,
-                             "kept": bool(keep), "seconds": time.perf_counter() - t})
+            attempts.append(
+                {
+                    "method": f"{method}+repair",
+                    "rounds": rounds,
+                    **cert_r.summary(),
+                    "sym_dirichlet_ratio": float(sd1 / sd0) if sd0 > 0 else None,
+                    "kept": bool(keep),
+                    "seconds": time.perf_counter() - t,
+                }
+            )
             if keep:
                 UVc, cert, method, repaired = UVr, cert_r, f"{method}+repair", True
     if used_fallback and not repaired:
@@ -932,16 +974,26 @@ def parameterize_chart(
             # also try with the boundary held on the circle, and keep the lower energy.
             t = time.perf_counter()
             UVs, cert_s, acc = _slim_guarded(Vn, Fc, UVt, slim_iterations, name)
-            attempts.append({"method": "tutte+slim", "accepted_iterations": acc,
-                             **(cert_s.summary() if cert_s else cert_t.summary()),
-                             "seconds": time.perf_counter() - t})
+            attempts.append(
+                {
+                    "method": "tutte+slim",
+                    "accepted_iterations": acc,
+                    **(cert_s.summary() if cert_s else cert_t.summary()),
+                    "seconds": time.perf_counter() - t,
+                }
+            )
             options = [(UVs, cert_s, "tutte+slim")] if acc > 0 else []
             if acc < slim_iterations:
                 t = time.perf_counter()
                 UVf, cert_f, acc_f = _slim_guarded(Vn, Fc, UVt, slim_iterations, name, bnd)
-                attempts.append({"method": "tutte+slim-fixed", "accepted_iterations": acc_f,
-                                 **(cert_f.summary() if cert_f else cert_t.summary()),
-                                 "seconds": time.perf_counter() - t})
+                attempts.append(
+                    {
+                        "method": "tutte+slim-fixed",
+                        "accepted_iterations": acc_f,
+                        **(cert_f.summary() if cert_f else cert_t.summary()),
+                        "seconds": time.perf_counter() - t,
+                    }
+                )
                 if acc_f > 0:
                     options.append((UVf, cert_f, "tutte+slim-fixed"))
             if options:
@@ -950,9 +1002,12 @@ def parameterize_chart(
         if not cert.bijective:
             log.warning("%s: fallback map is not bijective either (%s)", name, cert.summary())
         if method == "tutte":  # arbitrary scale: match the chart's area
-            a = 0.5 * np.abs(
-                np.cross(UVc[Fc[:, 1]] - UVc[Fc[:, 0]], UVc[Fc[:, 2]] - UVc[Fc[:, 0]])
-            ).sum()
+            a = (
+                0.5
+                * np.abs(
+                    np.cross(UVc[Fc[:, 1]] - UVc[Fc[:, 0]], UVc[Fc[:, 2]] - UVc[Fc[:, 0]])
+                ).sum()
+            )
             UVc = UVc / np.sqrt(a)
     elif cert is None:
         UVc, cert = _finish(UVc, Vn, Fc, name)
@@ -1004,7 +1059,7 @@ def compare_methods(
             row = {"chart": cname, "faces": int(np.shape(F)[0]), "method": method}
             try:
                 if method in PIPELINE_METHODS:
-                    res = parameterize_chart(V, F, method[len("param-"):], name=str(cname))
+                    res = parameterize_chart(V, F, method[len("param-") :], name=str(cname))
                     row.update({"result": res.method, "fallback_used": res.fallback_used})
                 else:
                     res = map_chart(V, F, method, name=str(cname))
@@ -1012,13 +1067,15 @@ def compare_methods(
                 row.update({"bijective": False, "error": str(exc)})
                 rows.append(row)
                 continue
-            row.update({
-                "bijective": res.bijective,
-                "flips": res.flips,
-                "overlaps": res.overlaps,
-                "degenerate": res.certificate.degenerate,
-                **res.distortion,
-                "seconds": res.seconds,
-            })
+            row.update(
+                {
+                    "bijective": res.bijective,
+                    "flips": res.flips,
+                    "overlaps": res.overlaps,
+                    "degenerate": res.certificate.degenerate,
+                    **res.distortion,
+                    "seconds": res.seconds,
+                }
+            )
             rows.append(row)
     return rows

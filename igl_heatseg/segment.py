@@ -153,9 +153,7 @@ class Segmentation:
 
 def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Face areas, shape (m,)."""
-    return 0.5 * np.linalg.norm(
-        np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1
-    )
+    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
 def segment_mesh(
@@ -387,9 +385,7 @@ def make_face_connected(
     inner = np.flatnonzero(topo.interior)
     f0, f1 = topo.EF[inner, 0], topo.EF[inner, 1]
     same = labels[f0] == labels[f1]
-    A = sp.csr_matrix(
-        (np.ones(int(same.sum()), dtype=np.int8), (f0[same], f1[same])), shape=(m, m)
-    )
+    A = sp.csr_matrix((np.ones(int(same.sum()), dtype=np.int8), (f0[same], f1[same])), shape=(m, m))
     npieces, piece = connected_components(A, directed=False)
     first = np.zeros(npieces, dtype=np.int64)
     first[piece[::-1]] = np.arange(m)[::-1]

@@ -193,9 +193,7 @@ def test_repair_untangles_a_local_fold():
 def test_auto_energy_tries_hlle_then_curved():
     V, F = grid(6, 5, jitter=0.2)
     res = parameterize_chart(V, F, "auto")
-    assert res.method == "hessian-hlle" and [a["method"] for a in res.attempts] == [
-        "hessian-hlle"
-    ]
+    assert res.method == "hessian-hlle" and [a["method"] for a in res.attempts] == ["hessian-hlle"]
     V, F = sphere_cap(2.4)
     res = parameterize_chart(V, F, "auto")
     assert [a["method"] for a in res.attempts][:2] == ["hessian-hlle", "hessian-curved"]

@@ -32,6 +32,7 @@ from .checks import as_mesh_arrays
 from .constants import EPS_DEFAULT, THETA_DEFAULT
 from .errors import MeshError
 from .seeds import dihedral_deviation, face_normals, seed_groups, sharp_edges
+from .segment import face_areas
 from .topology import edge_topology
 
 __all__ = [
@@ -54,10 +55,6 @@ WEIGHT_FLOOR: float = 1e-8
 
 #: Right-hand sides solved together in the harmonic solves (memory: m x this doubles).
 _RHS_BLOCK = 64
-
-
-def _face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
 def relabel_by_area(labels: ArrayLike, area: ArrayLike) -> np.ndarray:
@@ -128,7 +125,7 @@ def dihedral_region_growing(V: ArrayLike, F: ArrayLike, theta: float = THETA_DEF
     ef = topo.EF[join]
     A = sp.csr_matrix((np.ones(len(ef), dtype=np.int8), (ef[:, 0], ef[:, 1])), shape=(m, m))
     _, comp = connected_components(A, directed=False)
-    return relabel_by_area(comp, _face_areas(V, F))
+    return relabel_by_area(comp, face_areas(V, F))
 
 
 def random_walk_weights(
@@ -254,7 +251,7 @@ def random_walks(
         directed=False,
     )
     fgroup = _compact_groups(np.where(_seedless(fcomp, fgroup, ncomp), -2, fgroup), fcomp)
-    area = _face_areas(V, F)
+    area = face_areas(V, F)
     rows, cols = np.r_[pairs[:, 0], pairs[:, 1]], np.r_[pairs[:, 1], pairs[:, 0]]
     W = sp.csr_matrix((np.r_[w, w], (rows, cols)), shape=(m, m))
     Lap = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
@@ -354,4 +351,4 @@ def xatlas_charts(V: ArrayLike, F: ArrayLike, **chart_options) -> np.ndarray:
         _, inv = np.unique(comp[missing], return_inverse=True)
         labels[missing] = k + inv.reshape(-1)
         log.info("xatlas left %d faces out of every chart", int(missing.sum()))
-    return relabel_by_area(labels, _face_areas(V, F))
+    return relabel_by_area(labels, face_areas(V, F))

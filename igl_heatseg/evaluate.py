@@ -56,6 +56,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import dijkstra
 
 from .errors import MeshError
+from .segment import face_areas
 from .topology import edge_topology
 
 __all__ = [
@@ -90,23 +91,6 @@ ZERO_AREA_TOL = 1e-300
 # --------------------------------------------------------------------------------------------
 # Contingency table and the scores that only need it
 # --------------------------------------------------------------------------------------------
-
-
-def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Triangle areas.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-
-    Returns
-    -------
-    (m,) float64
-        Areas (non-negative).
-    """
-    P0, P1, P2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    return 0.5 * np.linalg.norm(np.cross(P1 - P0, P2 - P0), axis=1)
 
 
 def _as_labels(labels: ArrayLike, name: str, m: int | None = None) -> np.ndarray:

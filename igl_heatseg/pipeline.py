@@ -36,6 +36,7 @@ from .checks import CleanMesh
 from .constants import EPS_DEFAULT, THETA_DEFAULT
 from .cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
 from .errors import MeshError
+from .segment import face_areas
 from .topology import face_components
 
 __all__ = ["Chart", "PipelineResult", "run_pipeline", "register", "parse_cut_path"]
@@ -95,10 +96,6 @@ class PipelineResult:
     corner_uv: np.ndarray
     atlas: object | None
     report: dict
-
-
-def _face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
 def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
@@ -270,7 +267,7 @@ def run_pipeline(
     seg = segment_with_mode(mesh, mode, theta, eps, progress=progress, solver=solver)
     V, F = mesh.V, mesh.F
     m = F.shape[0]
-    areas = _face_areas(V, F)
+    areas = face_areas(V, F)
 
     # 1. charts: face-connected pieces of each segment
     t = time.perf_counter()

@@ -57,6 +57,7 @@ from scipy.sparse.csgraph import connected_components
 from .checks import CleanMesh
 from .errors import MeshError
 from .fastheat import FastHeatSolver
+from .seeds import dihedral_deviation
 from .segment import Segmentation, face_areas, final_numbering, make_face_connected
 from .topology import edge_topology, vertex_components
 
@@ -582,15 +583,7 @@ def merge_by_primitives(
 
 def _dihedral(V: np.ndarray, F: np.ndarray, topo) -> np.ndarray:
     """(ne,) angle between the normals of the two faces of each interior edge, 0 elsewhere."""
-    N, _ = _unit_normals(V, F)
-    inner = topo.interior
-    phi = np.zeros(len(topo.E))
-    ef = topo.EF[inner]
-    phi[inner] = np.arctan2(
-        np.linalg.norm(np.cross(N[ef[:, 0]], N[ef[:, 1]]), axis=1),
-        (N[ef[:, 0]] * N[ef[:, 1]]).sum(axis=1),
-    )
-    return phi
+    return np.nan_to_num(dihedral_deviation(V, F, topo)[1], nan=0.0)
 
 
 def _mean_edge_length(V: np.ndarray, E: np.ndarray) -> float:

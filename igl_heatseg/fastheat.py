@@ -60,8 +60,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .constants import HEAT_SUM_TOL
-from .heat import HeatLabels
-from .topology import vertex_components
+from .heat import HeatLabels, _argmax_update, require_seeded_components
 
 __all__ = [
     "FastHeatSolver",
@@ -271,16 +270,7 @@ class FastHeatSolver:
         self.group = np.asarray(group, dtype=np.int64)
         self.known = np.flatnonzero(self.group >= 0)
         self.k = int(self.group.max()) + 1 if len(self.known) else 0
-        ncomp, comp = vertex_components(self.n, F)
-        seeded = np.zeros(ncomp, dtype=bool)
-        seeded[comp[self.known]] = True
-        if not seeded.all():
-            bad = np.flatnonzero(~seeded)
-            raise ValueError(
-                f"{len(bad)} connected component(s) hold no seed vertex (e.g. the one with "
-                f"vertex {int(np.flatnonzero(comp == bad[0])[0])}); their heat problem is "
-                "singular"
-            )
+        require_seeded_components(self.n, F, self.known)
         r = (self.n - len(self.known)) / max(self.k, 1)
         ah, ap = _local_params(r)
         self.halo = ah if halo is None else int(halo)
@@ -959,15 +949,6 @@ def _seed_face_labels(Gc: np.ndarray) -> np.ndarray:
     lab = np.where(a == c, a, lab)
     lab = np.where(a == b, a, lab)
     return lab
-
-
-def _argmax_update(U: np.ndarray, offset: int, best: np.ndarray, arg: np.ndarray) -> None:
-    """Fold a batch of columns into a running argmax; earlier (lower) ids win ties."""
-    j = U.argmax(axis=1)
-    val = U[np.arange(U.shape[0]), j]
-    upd = val > best
-    best[upd] = val[upd]
-    arg[upd] = j[upd] + offset
 
 
 def _argmax_update_ids(U: np.ndarray, gids: np.ndarray, best: np.ndarray, arg: np.ndarray) -> None:

@@ -94,16 +94,7 @@ class HeatSolver:
         self.group = np.asarray(group, dtype=np.int64)
         self.known = np.flatnonzero(self.group >= 0)
         self.k = int(self.group.max()) + 1 if len(self.known) else 0
-        ncomp, comp = vertex_components(self.n, F)
-        seeded = np.zeros(ncomp, dtype=bool)
-        seeded[comp[self.known]] = True
-        if not seeded.all():
-            bad = np.flatnonzero(~seeded)
-            raise ValueError(
-                f"{len(bad)} connected component(s) hold no seed vertex (e.g. the one with "
-                f"vertex {int(np.flatnonzero(comp == bad[0])[0])}); their heat problem is "
-                "singular"
-            )
+        require_seeded_components(self.n, F, self.known)
         if L is None:
             L = igl.cotmatrix(V, F)
         self.L = L
@@ -177,6 +168,35 @@ class HeatSolver:
         if err > HEAT_SUM_TOL:
             log.warning("heat fields sum to 1 only within %.3g (tolerance %.1g)", err, HEAT_SUM_TOL)
         return HeatLabels(vertex_labels=varg, face_labels=farg, vertex_max=vmax, sum_error=err)
+
+
+def require_seeded_components(n: int, F: np.ndarray, known: np.ndarray) -> None:
+    """Check that every connected component holds a Dirichlet (seed) vertex.
+
+    Parameters
+    ----------
+    n : int
+        Vertex count.
+    F : (m, 3) int64
+    known : (s,) int64
+        Seed vertex ids.
+
+    Raises
+    ------
+    ValueError
+        Naming how many components hold no seed and one vertex of the first; their free
+        block of the Laplacian is singular.
+    """
+    ncomp, comp = vertex_components(n, F)
+    seeded = np.zeros(ncomp, dtype=bool)
+    seeded[comp[known]] = True
+    if not seeded.all():
+        bad = np.flatnonzero(~seeded)
+        raise ValueError(
+            f"{len(bad)} connected component(s) hold no seed vertex (e.g. the one with "
+            f"vertex {int(np.flatnonzero(comp == bad[0])[0])}); their heat problem is "
+            "singular"
+        )
 
 
 def _argmax_update(U: np.ndarray, offset: int, best: np.ndarray, arg: np.ndarray) -> None:

@@ -58,8 +58,14 @@ from .checks import CleanMesh
 from .errors import MeshError
 from .fastheat import FastHeatSolver
 from .seeds import dihedral_deviation
-from .segment import Segmentation, face_areas, final_numbering, make_face_connected
-from .topology import edge_topology, vertex_components
+from .segment import (
+    Segmentation,
+    face_areas,
+    final_numbering,
+    group_seedless_components,
+    make_face_connected,
+)
+from .topology import edge_topology
 
 __all__ = [
     "RobustSegmentation",
@@ -734,14 +740,7 @@ def segment_robust(
     group0 = np.full(n, -1, dtype=np.int64)
     _, inv = np.unique(comp[seed], return_inverse=True)
     group0[seed] = inv.reshape(-1)
-    k_seed = int(group0.max()) + 1 if seed.any() else 0
-    ncomp, vcomp = vertex_components(n, F)
-    seeded = np.zeros(ncomp, dtype=bool)
-    seeded[vcomp[seed]] = True
-    seedless = np.flatnonzero(~seeded)
-    for j, c in enumerate(seedless):
-        group0[vcomp == c] = k_seed + j
-    k0 = k_seed + len(seedless)
+    group0, k0, n_seedless, ncomp, vcomp = group_seedless_components(F, group0)
     timings["seeds"] = time.perf_counter() - t
     log.info("robust: %d seed vertices in %d groups", int((group0 >= 0).sum()), k0)
 
@@ -807,7 +806,7 @@ def segment_robust(
         segment_group=order,
         kept_groups=kept,
         components=ncomp,
-        seedless_components=len(seedless),
+        seedless_components=n_seedless,
         merged_islands=merged1,
         merged_islands_initial=merged0,
         heat_sum_error=max(hl0.sum_error, hl1.sum_error),

@@ -37,6 +37,7 @@ __all__ = [
     "MODES",
     "segment_with_mode",
     "final_numbering",
+    "group_seedless_components",
     "Segmentation",
     "segment_mesh",
     "segment",
@@ -151,6 +152,42 @@ class Segmentation:
         return solver.temperature(gid)
 
 
+def group_seedless_components(
+    F: np.ndarray, group: np.ndarray
+) -> tuple[np.ndarray, int, int, int, np.ndarray]:
+    """Make every connected component without a seed vertex one group of its own.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    group : (n,) int64
+        Seed group per vertex, ``-1`` for free vertices.
+
+    Returns
+    -------
+    group : (n,) int64
+        A copy; the vertices of the ``s`` seedless components get ids ``k..k+s-1``.
+    k : int
+        Number of groups afterwards.
+    seedless : int
+        Number of seedless components ``s``.
+    ncomp : int
+        Number of connected components.
+    vcomp : (n,) int64
+        Component id of each vertex.
+    """
+    ncomp, vcomp = vertex_components(group.shape[0], F)
+    seeds = group >= 0
+    seeded = np.zeros(ncomp, dtype=bool)
+    seeded[vcomp[seeds]] = True
+    seedless = np.flatnonzero(~seeded)
+    k = int(group.max()) + 1 if seeds.any() else 0
+    group = group.copy()
+    for j, c in enumerate(seedless):
+        group[vcomp == c] = k + j
+    return group, k + len(seedless), len(seedless), ncomp, vcomp
+
+
 def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Face areas, shape (m,)."""
     return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
@@ -221,19 +258,11 @@ def segment_mesh(
     sharp = sharp_edges(phi, theta)
     mask = np.ones(n, dtype=bool)
     mask[E[sharp].ravel()] = False
-    k_seed, group0 = seed_groups(F, mask, E)
-    ncomp, vcomp = vertex_components(n, F)
-    seeded = np.zeros(ncomp, dtype=bool)
-    seeded[vcomp[mask]] = True
-    seedless = np.flatnonzero(~seeded)
-    for j, c in enumerate(seedless):  # a seedless component becomes one group of its own
-        group0[vcomp == c] = k_seed + j
-    k0 = k_seed + len(seedless)
+    _, group0 = seed_groups(F, mask, E)
+    group0, k0, n_seedless, ncomp, vcomp = group_seedless_components(F, group0)
     area = face_areas(V, F)
     timings["seeds"] = time.perf_counter() - t
-    log.info(
-        "%d seed vertices in %d groups (%d seedless components)", mask.sum(), k0, len(seedless)
-    )
+    log.info("%d seed vertices in %d groups (%d seedless components)", mask.sum(), k0, n_seedless)
 
     t = time.perf_counter()
     L = igl.cotmatrix(V, F)
@@ -279,7 +308,7 @@ def segment_mesh(
         segment_group=order,
         kept_groups=kept,
         components=ncomp,
-        seedless_components=len(seedless),
+        seedless_components=n_seedless,
         merged_islands=merged1,
         merged_islands_initial=merged0,
         heat_sum_error=max(hl0.sum_error, hl1.sum_error),

@@ -31,9 +31,10 @@ argmax as ``HeatSolver`` does.
    Hence ``w_i(v) <= u_i(v) <= w_i(v) + d(v)``: a vertex whose best lower bound beats every
    other group's upper bound is *certified*; faces likewise with the corner mean of ``d``.
 4. Refinement: the groups that could still win at an uncertified vertex or face (upper bound
-   >= best lower bound) are re-solved on domains grown ``refine_halo`` (30) hops around it.
-   With ``h`` the harmonic measure of that domain's outer boundary (one more right-hand
-   side), ``w <= u <= w + h`` under the same M-matrix condition, and ``h`` is tiny that deep.
+   >= best lower bound) are re-solved on domains grown ``refine_halo`` hops around it (20, or
+   the halo if larger; nearby items share one domain).  With ``h`` the harmonic measure of
+   that domain's outer boundary (one more right-hand side), ``w <= u <= w + h`` under the
+   same M-matrix condition, and ``h`` is tiny that deep.
 5. Whatever is still uncertified is recomputed exactly: its candidate groups are solved on
    the whole mesh with one global factorization, and the argmax is taken from exact values.
 
@@ -58,6 +59,7 @@ from collections.abc import Callable, Sequence
 import igl
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from .constants import HEAT_SUM_TOL
 from .heat import HeatLabels, _argmax_update, require_seeded_components
@@ -87,8 +89,12 @@ HALO_HOPS: int = 10
 #: Largest halo chosen automatically.
 HALO_HOPS_MAX: int = 30
 
-#: Free vertices per patch (minimum; sparser groups get larger patches).
-PATCH_VERTICES: int = 2000
+#: Free vertices per patch (minimum; sparser groups get larger patches).  Measured on
+#: iron.ply's first round (6,159 groups, 10 free vertices per group), labels of the local
+#: mode: 2000 -> 2.1 s, 1000 -> 2.0 s, 600 -> 1.5 s (libigl's factorization, which is 3x
+#: faster than CHOLMOD's, serves patches of fewer than 80 groups; smaller domains make each
+#: of the 6,159 solves cheaper, at 1.6 domain vertices per free vertex more).
+PATCH_VERTICES: int = 600
 
 #: Largest patch chosen automatically.
 PATCH_VERTICES_MAX: int = 16000
@@ -132,8 +138,11 @@ _SOLVE_BATCH = 32
 #: Fewest right-hand sides for which CHOLMOD (cholespy) beats libigl's LLT (see _Factor).
 _CHOLESPY_MIN_RHS = 80
 
-#: Hops by which refinement domains extend past the uncertified vertices (step 4).
-REFINE_HOPS: int = 30
+#: Hops by which refinement domains extend past the uncertified vertices (step 4), at least;
+#: a larger patch halo is used when there is one.  Measured on iron.ply's first round
+#: (patch 600): 10 hops left 34 vertices and 81 faces to the exact fallback (210 global
+#: solves), 15 left 1 and 3, 20 left none (refinement 0.25 s); 30 costs 0.3-1 s more.
+REFINE_HOPS: int = 20
 
 
 # ------------------------------------------------------------------------------------------
@@ -224,9 +233,9 @@ class FastHeatSolver:
         :data:`EXACT_WORK` at construction time) or when groups are sparse (more than
         :data:`LOCAL_MAX_FREE_PER_GROUP` free vertices per group: long-range fields);
         ``float("inf")`` forces exact solves, ``0`` local ones.
-    refine_halo : int
-        Hops of the refinement domains (default :data:`REFINE_HOPS`); what they leave
-        uncertified is solved exactly on the whole mesh.
+    refine_halo : int, optional
+        Hops of the refinement domains (default: the larger of :data:`REFINE_HOPS` and the
+        halo); what they leave uncertified is solved exactly on the whole mesh.
 
     Attributes
     ----------
@@ -263,7 +272,7 @@ class FastHeatSolver:
         halo: int | None = None,
         patch_size: int | None = None,
         exact_work: float | None = None,
-        refine_halo: int = REFINE_HOPS,
+        refine_halo: int | None = None,
     ) -> None:
         self.V, self.F = V, F
         self.n = V.shape[0]
@@ -276,7 +285,7 @@ class FastHeatSolver:
         self.halo = ah if halo is None else int(halo)
         self.patch_size = ap if patch_size is None else int(patch_size)
         self.exact_work = float(EXACT_WORK if exact_work is None else exact_work)
-        self.refine_halo = int(refine_halo)
+        self.refine_halo = max(REFINE_HOPS, self.halo) if refine_halo is None else int(refine_halo)
         if L is None:
             L = igl.cotmatrix(V, F)
         self.L = sp.csr_matrix(L)
@@ -637,7 +646,8 @@ class FastHeatSolver:
         open_f = fexc[uf] + slack_f[uf] >= fval[uf, 0]
         st["certify_s"] = time.perf_counter() - t
         # 4. Refinement: the candidates of the uncertified (not open) items are re-solved on
-        #    domains grown REFINE_HOPS around them; bounds from the boundary's harmonic measure.
+        #    domains grown refine_halo hops around them; bounds from the boundary's harmonic
+        #    measure.
         t = time.perf_counter()
         iv = ~open_v
         jf = ~open_f
@@ -650,7 +660,6 @@ class FastHeatSolver:
             uf,
             fid[uf][pf_i, pf_j],
             pf_i,
-            owner,
             fc,
             np.maximum(np.where(cand_v, -np.inf, vval[uv]).max(axis=1), vexc[uv]) + slack_v[uv],
             np.maximum(np.where(cand_f, -np.inf, fval[uf]).max(axis=1), fexc[uf]) + slack_f[uf],
@@ -725,13 +734,15 @@ class FastHeatSolver:
             sum_error=resid,
         )
 
-    def _refine(self, uv, gv, iv, uf, gf, jf, owner, fc, rival_v, rival_f):
+    def _refine(self, uv, gv, iv, uf, gf, jf, fc, rival_v, rival_f):
         """Re-solve candidate groups on large domains around uncertified vertices and faces.
 
         ``uv`` (a,) uncertified free vertices (free indices), ``gv, iv`` candidate pairs
         (group, index into ``uv``); ``uf, gf, jf`` the same for faces.  ``rival_v`` (a,) and
-        ``rival_f`` (b,) bound every non-candidate.  For owner patch ``c`` the domain grows
-        :data:`REFINE_HOPS` hops around the items and the groups' seeds; with ``h`` the
+        ``rival_f`` (b,) bound every non-candidate.  Items within ``2 refine_halo / 3`` hops of
+        each other form a cluster (:func:`_clusters`); a cluster's domain grows
+        ``refine_halo`` hops around its items and its candidate groups' seeds, and is
+        factored once; with ``h`` the
         harmonic measure of the domain's outer boundary (``A_DD h = L_D,out 1``),
         ``w <= u <= w + h`` when the weights are non-negative (``u <= 1`` outside).
 
@@ -745,24 +756,24 @@ class FastHeatSolver:
         hi_v = np.full(len(gv), np.inf)
         lo_f = np.full(len(gf), -np.inf)
         hi_f = np.full(len(gf), np.inf)
-        ov, of = owner[gv], owner[gf]
-        patches = np.union1d(ov, of)
-        if len(patches):
-            cidx = np.searchsorted(patches, np.r_[ov, of])
+        fcor = fc[uf[jf]]  # (len(gf), 3) free corners of the face items, -1 at seeds
+        # One vertex per candidate pair: the item vertex, or the face item's first free corner.
+        item = np.r_[uv[iv], fcor.max(axis=1)]
+        P = sp.csr_matrix(A, dtype=np.int8, copy=True)
+        P.data[:] = 1
+        ncl, cidx = _clusters(P, item, max(self.refine_halo // 3, 1))
+        if ncl:
             # growth sources: item vertices and the free neighbours of the groups' seeds
             Bc = B[:, np.r_[gv, gf]].tocoo()
-            fcor = fc[uf[jf]]  # (len(gf), 3)
             src_r = np.r_[uv[iv], fcor.ravel(), Bc.row]
             src_c = np.r_[cidx[: len(gv)], np.repeat(cidx[len(gv) :], 3), cidx[Bc.col]]
             keep = src_r >= 0
             X = sp.csr_matrix(
                 (np.ones(int(keep.sum()), dtype=np.int8), (src_r[keep], src_c[keep])),
-                shape=(nf, len(patches)),
+                shape=(nf, ncl),
             )
             X.sum_duplicates()
             X.data[:] = 1
-            P = sp.csr_matrix(A, dtype=np.int8, copy=True)
-            P.data[:] = 1
             for _ in range(self.refine_halo):
                 X = X + P @ X
                 X.data[:] = 1
@@ -770,7 +781,7 @@ class FastHeatSolver:
             X.sort_indices()
             ones = np.ones(nf)
             Arow = A @ ones
-            for ci in range(len(patches)):
+            for ci in range(ncl):
                 D = X.indices[X.indptr[ci] : X.indptr[ci + 1]]
                 sv = np.flatnonzero(cidx[: len(gv)] == ci)
                 sf = np.flatnonzero(cidx[len(gv) :] == ci)
@@ -831,6 +842,37 @@ def _local_params(r: float) -> tuple[int, int]:
     halo = int(np.clip(round(2.5 * np.sqrt(max(r, 0.0))), HALO_HOPS, HALO_HOPS_MAX))
     patch = int(np.clip(50 * r, PATCH_VERTICES, PATCH_VERTICES_MAX))
     return halo, patch
+
+
+def _clusters(P: sp.csr_matrix, item: np.ndarray, hops: int) -> tuple[int, np.ndarray]:
+    """Cluster vertices that lie within ``2 hops`` edge hops of each other.
+
+    Parameters
+    ----------
+    P : (N, N) sparse
+        Adjacency pattern (any non-zero is an edge).
+    item : (p,) int64
+        Vertex of each item (repeats allowed).
+    hops : int
+
+    Returns
+    -------
+    count : int
+    cluster : (p,) int64
+        Cluster of each item, ``0..count-1``.
+    """
+    if len(item) == 0:
+        return 0, np.zeros(0, dtype=np.int64)
+    mark = np.zeros(P.shape[0], dtype=np.int8)
+    mark[item] = 1
+    for _ in range(hops):
+        mark = np.minimum(mark + P @ mark, 1).astype(np.int8)
+    sub = np.flatnonzero(mark)
+    _, comp = connected_components(P[sub][:, sub], directed=False)
+    pos = np.full(P.shape[0], -1, dtype=np.int64)
+    pos[sub] = np.arange(len(sub))
+    used, cluster = np.unique(comp[pos[item]], return_inverse=True)
+    return len(used), cluster.astype(np.int64)
 
 
 def _decide(a, item, gid, lo, hi, rival):

@@ -34,7 +34,9 @@ argmax as ``HeatSolver`` does.
    >= best lower bound) are re-solved on domains grown ``refine_halo`` hops around it (20, or
    the halo if larger; nearby items share one domain).  With ``h`` the harmonic measure of
    that domain's outer boundary (one more right-hand side), ``w <= u <= w + h`` under the
-   same M-matrix condition, and ``h`` is tiny that deep.
+   same M-matrix condition, and ``h`` is tiny that deep.  Where a group outside the kept
+   top-K may win ("open" items), every group with a seed next to the domain is tried; all
+   others sum to at most ``h`` there.
 5. Whatever is still uncertified is recomputed exactly: its candidate groups are solved on
    the whole mesh with one global factorization, and the argmax is taken from exact values.
 
@@ -143,6 +145,12 @@ _CHOLESPY_MIN_RHS = 80
 #: (patch 600): 10 hops left 34 vertices and 81 faces to the exact fallback (210 global
 #: solves), 15 left 1 and 3, 20 left none (refinement 0.25 s); 30 costs 0.3-1 s more.
 REFINE_HOPS: int = 20
+
+#: Refinement clusters never span more than this many consecutive patches (Morton order), so
+#: that a mesh with uncertified items everywhere does not refine in one mesh-wide domain with
+#: hundreds of right-hand sides (noisy 50k mesh: refinement 0.61 s in one cluster, 0.33-0.40 s
+#: with 3-8 patches per part; iron.ply 0.25-0.37 s, within the noise of a shared machine).
+_REFINE_SPLIT = 4
 
 
 # ------------------------------------------------------------------------------------------
@@ -645,27 +653,27 @@ class FastHeatSolver:
         open_v = vexc[uv] + slack_v[uv] >= vval[uv, 0]
         open_f = fexc[uf] + slack_f[uf] >= fval[uf, 0]
         st["certify_s"] = time.perf_counter() - t
-        # 4. Refinement: the candidates of the uncertified (not open) items are re-solved on
-        #    domains grown refine_halo hops around them; bounds from the boundary's harmonic
-        #    measure.
+        # 4. Refinement: the candidates of the uncertified items are re-solved on domains grown
+        #    refine_halo hops around them; bounds from the boundary's harmonic measure.  Where
+        #    a group outside the kept candidates may win ("open" items), every group with a
+        #    seed next to the refinement domain is tried (see _refine).
         t = time.perf_counter()
-        iv = ~open_v
-        jf = ~open_f
-        pv_i, pv_j = np.nonzero(cand_v & iv[:, None])
-        pf_i, pf_j = np.nonzero(cand_f & jf[:, None])
+        pv_i, pv_j = np.nonzero(cand_v & ~open_v[:, None])
+        pf_i, pf_j = np.nonzero(cand_f & ~open_f[:, None])
         ok_v, lab_v, max_v, ok_f, lab_f = self._refine(
             uv,
             vid[uv][pv_i, pv_j],
             pv_i,
+            open_v,
             uf,
             fid[uf][pf_i, pf_j],
             pf_i,
+            open_f,
             fc,
+            patch // _REFINE_SPLIT,
             np.maximum(np.where(cand_v, -np.inf, vval[uv]).max(axis=1), vexc[uv]) + slack_v[uv],
             np.maximum(np.where(cand_f, -np.inf, fval[uf]).max(axis=1), fexc[uf]) + slack_f[uf],
         )
-        ok_v &= iv
-        ok_f &= jf
         vertex_labels[free[uv[ok_v]]] = lab_v[ok_v]
         vertex_max[free[uv[ok_v]]] = max_v[ok_v]
         face_labels[uf[ok_f]] = lab_f[ok_f]
@@ -678,7 +686,9 @@ class FastHeatSolver:
                 log.warning("vertices or faces outside every patch domain: solving all groups")
                 more = np.arange(k)
             else:
-                more = self._groups_near(X, owned, bounds, uv[open_v], uf[open_f], fc)
+                more = self._groups_near(
+                    X, owned, bounds, uv[open_v & ~ok_v], uf[open_f & ~ok_f], fc
+                )
             cands = np.union1d(cands, more)
         uv, uf = uv[~ok_v], uf[~ok_f]
         st["exact_vertices"] = len(uv)
@@ -734,17 +744,37 @@ class FastHeatSolver:
             sum_error=resid,
         )
 
-    def _refine(self, uv, gv, iv, uf, gf, jf, fc, rival_v, rival_f):
+    def _refine(self, uv, gv, iv, open_v, uf, gf, jf, open_f, fc, split, rival_v, rival_f):
         """Re-solve candidate groups on large domains around uncertified vertices and faces.
 
-        ``uv`` (a,) uncertified free vertices (free indices), ``gv, iv`` candidate pairs
-        (group, index into ``uv``); ``uf, gf, jf`` the same for faces.  ``rival_v`` (a,) and
-        ``rival_f`` (b,) bound every non-candidate.  Items within ``2 refine_halo / 3`` hops of
-        each other form a cluster (:func:`_clusters`); a cluster's domain grows
-        ``refine_halo`` hops around its items and its candidate groups' seeds, and is
-        factored once; with ``h`` the
-        harmonic measure of the domain's outer boundary (``A_DD h = L_D,out 1``),
-        ``w <= u <= w + h`` when the weights are non-negative (``u <= 1`` outside).
+        Parameters
+        ----------
+        uv : (a,) int64
+            Uncertified free vertices (free indices).
+        gv, iv : (p,) int64
+            Candidate pairs: group, index into ``uv``.
+        open_v : (a,) bool
+            Items where a group outside the candidates may win: every group with a seed on
+            or next to the refinement domain is tried there, and the rest is bounded by the
+            domain boundary's harmonic measure.
+        uf, gf, jf, open_f
+            The same for uncertified faces.
+        fc : (m, 3) int64
+            Free index of each face corner, -1 at seeds.
+        split : (nf,) int64
+            Part of each free vertex; clusters never span two parts.
+        rival_v, rival_f : (a,), (b,) float64
+            Bound on every non-candidate (used for items that are not open).
+
+        Notes
+        -----
+        Items of one part within ``2 refine_halo / 3`` hops of each other form a cluster
+        (:func:`_clusters`).  A cluster's domain ``D`` grows ``refine_halo`` hops around its
+        items and its candidate groups' seeds and is factored once.  With ``h`` the harmonic
+        measure of ``D``'s outer boundary (``A_DD h = L_D,out 1``), ``w <= u <= w + h``
+        when the weights are non-negative (``u <= 1`` outside), and the groups without a
+        seed next to ``D`` sum to at most ``h`` inside it.  As in the patch solves the
+        margins are ``CERT_FACTOR`` times these bounds.
 
         Returns
         -------
@@ -756,17 +786,32 @@ class FastHeatSolver:
         hi_v = np.full(len(gv), np.inf)
         lo_f = np.full(len(gf), -np.inf)
         hi_f = np.full(len(gf), np.inf)
-        fcor = fc[uf[jf]]  # (len(gf), 3) free corners of the face items, -1 at seeds
-        # One vertex per candidate pair: the item vertex, or the face item's first free corner.
-        item = np.r_[uv[iv], fcor.max(axis=1)]
+        ok_v = np.zeros(a, dtype=bool)
+        lab_v = np.full(a, -1, dtype=np.int64)
+        max_v = np.full(a, -np.inf)
+        ok_f = np.zeros(b, dtype=bool)
+        lab_f = np.full(b, -1, dtype=np.int64)
+        fcor = fc[uf]  # (b, 3) free corners of the face items, -1 at seeds
+        # Items to refine, one vertex each (a face: its first free corner).
+        act_v = open_v.copy()
+        act_v[iv] = True
+        act_f = open_f.copy()
+        act_f[jf] = True
+        av, af = np.flatnonzero(act_v), np.flatnonzero(act_f)
         P = sp.csr_matrix(A, dtype=np.int8, copy=True)
         P.data[:] = 1
-        ncl, cidx = _clusters(P, item, max(self.refine_halo // 3, 1))
+        ncl, cl = _clusters(
+            P, np.r_[uv[av], fcor[af].max(axis=1)], max(self.refine_halo // 3, 1), split
+        )
+        cl_v = np.full(a, -1, dtype=np.int64)
+        cl_v[av] = cl[: len(av)]
+        cl_f = np.full(b, -1, dtype=np.int64)
+        cl_f[af] = cl[len(av) :]
         if ncl:
             # growth sources: item vertices and the free neighbours of the groups' seeds
             Bc = B[:, np.r_[gv, gf]].tocoo()
-            src_r = np.r_[uv[iv], fcor.ravel(), Bc.row]
-            src_c = np.r_[cidx[: len(gv)], np.repeat(cidx[len(gv) :], 3), cidx[Bc.col]]
+            src_r = np.r_[uv[av], fcor[af].ravel(), Bc.row]
+            src_c = np.r_[cl_v[av], np.repeat(cl_f[af], 3), np.r_[cl_v[iv], cl_f[jf]][Bc.col]]
             keep = src_r >= 0
             X = sp.csr_matrix(
                 (np.ones(int(keep.sum()), dtype=np.int8), (src_r[keep], src_c[keep])),
@@ -779,36 +824,71 @@ class FastHeatSolver:
                 X.data[:] = 1
             X = X.tocsc()
             X.sort_indices()
-            ones = np.ones(nf)
-            Arow = A @ ones
+            Arow = A @ np.ones(nf)
+            Br = B.tocsr()
+            pair_cl_v, pair_cl_f = cl_v[iv], cl_f[jf]
+            loc = np.full(nf, -1, dtype=np.int64)
             for ci in range(ncl):
                 D = X.indices[X.indptr[ci] : X.indptr[ci + 1]]
-                sv = np.flatnonzero(cidx[: len(gv)] == ci)
-                sf = np.flatnonzero(cidx[len(gv) :] == ci)
+                sv = np.flatnonzero(pair_cl_v == ci)
+                sf = np.flatnonzero(pair_cl_f == ci)
+                ov = np.flatnonzero(open_v & (cl_v == ci))
+                of = np.flatnonzero(open_f & (cl_f == ci))
                 gids = np.unique(np.r_[gv[sv], gf[sf]])
+                BDr = Br[D]
+                if len(ov) or len(of):  # every group with a seed next to D
+                    gids = np.union1d(gids, np.unique(BDr.indices))
                 ADD = A[D][:, D]
                 bh = -(Arow[D] - ADD @ np.ones(len(D)))  # L_D,out 1 (>= 0 for cot weights)
-                rhs = np.c_[B[D][:, gids].toarray(), bh]
+                rhs = np.c_[BDr[:, gids].toarray(), bh]
                 W = _Factor(ADD, rhs.shape[1]).solve(rhs)
                 if W.ndim == 1:
                     W = W[:, None]
                 h = np.maximum(W[:, -1], 0.0)
-                loc = np.full(nf, -1, dtype=np.int64)
+                W = W[:, :-1]
                 loc[D] = np.arange(len(D))
+                # candidate pairs
                 col_v = np.searchsorted(gids, gv[sv])
                 rv = loc[uv[iv[sv]]]
                 lo_v[sv] = W[rv, col_v]
                 hi_v[sv] = W[rv, col_v] + CERT_FACTOR * h[rv]
                 col_f = np.searchsorted(gids, gf[sf])
-                cr = fcor[sf]  # free corners (-1 at seeds)
-                rl = np.where(cr >= 0, loc[np.maximum(cr, 0)], -1)
-                isown = (group[F[uf[jf[sf]]]] == gf[sf][:, None]).sum(axis=1)
-                wv = np.where(rl >= 0, W[np.maximum(rl, 0), col_f[:, None]], 0.0)
-                hv = np.where(rl >= 0, h[np.maximum(rl, 0)], 0.0)
-                lo_f[sf] = (wv.sum(axis=1) + isown) / 3.0
-                hi_f[sf] = lo_f[sf] + CERT_FACTOR * hv.sum(axis=1) / 3.0
-        ok_v, lab_v, max_v = _decide(a, iv, gv, lo_v, hi_v, rival_v)
-        ok_f, lab_f, _ = _decide(b, jf, gf, lo_f, hi_f, rival_f)
+                lo, hgap = _face_rows(W, h, loc, fcor[jf[sf]], group[F[uf[jf[sf]]]], gf[sf], col_f)
+                lo_f[sf] = lo
+                hi_f[sf] = lo + CERT_FACTOR * hgap
+                # open items: all groups at once; the rest sum to at most h
+                if len(ov):
+                    rv = loc[uv[ov]]
+                    Wv = W[rv]  # (len(ov), len(gids))
+                    _decide_all(
+                        Wv,
+                        CERT_FACTOR * h[rv],
+                        gids,
+                        ov,
+                        ok_v,
+                        lab_v,
+                        max_v,
+                    )
+                if len(of):
+                    cr = fcor[of]
+                    rl = np.where(cr >= 0, loc[np.maximum(cr, 0)], -1)
+                    Wz = np.vstack([W, np.zeros((1, len(gids)))])
+                    rz = np.where(rl >= 0, rl, len(D))
+                    own = (group[F[uf[of]]][:, :, None] == gids[None, None, :]).sum(axis=1)
+                    Wf = (Wz[rz[:, 0]] + Wz[rz[:, 1]] + Wz[rz[:, 2]] + own) / 3.0
+                    hz = np.r_[h, 0.0]
+                    gap = CERT_FACTOR * (hz[rz[:, 0]] + hz[rz[:, 1]] + hz[rz[:, 2]]) / 3.0
+                    _decide_all(Wf, gap, gids, of, ok_f, lab_f, None)
+                loc[D] = -1
+        # candidate pairs of the items that are not open
+        pv = ~open_v[iv]
+        pf = ~open_f[jf]
+        okp, labp, maxp = _decide(a, iv[pv], gv[pv], lo_v[pv], hi_v[pv], rival_v)
+        sel = ~open_v
+        ok_v[sel], lab_v[sel], max_v[sel] = okp[sel], labp[sel], maxp[sel]
+        okp, labp, _ = _decide(b, jf[pf], gf[pf], lo_f[pf], hi_f[pf], rival_f)
+        sel = ~open_f
+        ok_f[sel], lab_f[sel] = okp[sel], labp[sel]
         return ok_v, lab_v, max_v, ok_f, lab_f
 
     def _groups_near(self, X, owned, bounds, fv, ff, fc) -> np.ndarray:
@@ -844,8 +924,10 @@ def _local_params(r: float) -> tuple[int, int]:
     return halo, patch
 
 
-def _clusters(P: sp.csr_matrix, item: np.ndarray, hops: int) -> tuple[int, np.ndarray]:
-    """Cluster vertices that lie within ``2 hops`` edge hops of each other.
+def _clusters(
+    P: sp.csr_matrix, item: np.ndarray, hops: int, split: np.ndarray
+) -> tuple[int, np.ndarray]:
+    """Cluster items of one part that lie within ``2 hops`` edge hops of each other.
 
     Parameters
     ----------
@@ -854,6 +936,10 @@ def _clusters(P: sp.csr_matrix, item: np.ndarray, hops: int) -> tuple[int, np.nd
     item : (p,) int64
         Vertex of each item (repeats allowed).
     hops : int
+    split : (N,) int64
+        Part of each vertex: items in different parts are never clustered together (this
+        bounds a cluster's domain, and so its solves, on meshes with uncertified items
+        everywhere).
 
     Returns
     -------
@@ -871,8 +957,49 @@ def _clusters(P: sp.csr_matrix, item: np.ndarray, hops: int) -> tuple[int, np.nd
     _, comp = connected_components(P[sub][:, sub], directed=False)
     pos = np.full(P.shape[0], -1, dtype=np.int64)
     pos[sub] = np.arange(len(sub))
-    used, cluster = np.unique(comp[pos[item]], return_inverse=True)
+    key = comp[pos[item]].astype(np.int64) * (int(split.max()) + 1) + split[item]
+    used, cluster = np.unique(key, return_inverse=True)
     return len(used), cluster.astype(np.int64)
+
+
+def _face_rows(W, h, loc, cr, cg, gid, col):
+    """Lower bound and ``h`` gap of the face mean of one group per face item.
+
+    ``W`` (|D|, c) fields on a domain, ``h`` (|D|,) its boundary's harmonic measure, ``loc``
+    (nf,) row of each free vertex in ``D`` (-1 outside), ``cr`` (r, 3) free corners (-1 at
+    seeds), ``cg`` (r, 3) seed group of each corner, ``gid`` (r,) the group and ``col`` (r,)
+    its column in ``W``.
+
+    Returns
+    -------
+    lo (r,) float64, gap (r,) float64 (corner mean of ``h``)
+    """
+    rl = np.where(cr >= 0, loc[np.maximum(cr, 0)], -1)
+    isown = (cg == gid[:, None]).sum(axis=1)
+    wv = np.where(rl >= 0, W[np.maximum(rl, 0), col[:, None]], 0.0)
+    hv = np.where(rl >= 0, h[np.maximum(rl, 0)], 0.0)
+    return (wv.sum(axis=1) + isown) / 3.0, hv.sum(axis=1) / 3.0
+
+
+def _decide_all(Wv, gap, gids, items, ok, lab, best):
+    """Certified argmax per item from all candidate values at once.
+
+    ``Wv`` (r, c) lower bounds of the candidates ``gids`` (c,) (increasing), ``gap`` (r,)
+    the upper bound's excess (also the bound on every non-candidate).  Writes ``ok``,
+    ``lab`` and ``best`` (if given) at ``items`` (r,).
+    """
+    if Wv.shape[1] == 0:
+        return
+    j = Wv.argmax(axis=1)  # first maximum: the lowest group id on ties
+    r = np.arange(len(items))
+    top = Wv[r, j]
+    rest = Wv.copy()
+    rest[r, j] = -np.inf
+    rival = np.maximum(rest.max(axis=1) + gap, gap)
+    ok[items] = top > rival + CERT_ABS
+    lab[items] = gids[j]
+    if best is not None:
+        best[items] = top
 
 
 def _decide(a, item, gid, lo, hi, rival):

@@ -195,3 +195,18 @@ def test_segment_mesh_fast_equals_exact_on_noisy_fandisk(data_dir, monkeypatch):
     np.testing.assert_allclose(fast.segment_areas, exact.segment_areas)
     # fields stay available (exact, from one global factorization)
     np.testing.assert_allclose(fast.temperature(0), exact.temperature(0), atol=TEMP_TOL)
+
+
+def test_open_items_refined_with_nearby_groups(monkeypatch):
+    """With two candidates kept per vertex, rivals are often outside the list ("open"):
+    refinement must then try every nearby group, and the labels stay exact."""
+    import igl_heatseg.fastheat as fh
+
+    V, F = sphere(4)
+    V = _perturb(V, F, 0.2, 11)
+    k, group = _noisy_groups(V, F, 0.2, 5)
+    monkeypatch.setattr(fh, "TOPK", 2)
+    solver, _, _ = _compare(V, F, group, **LOCAL)
+    assert solver.stats["uncertified_vertices"] > 0
+    # the open items were decided by local refinement, not by global solves of all groups
+    assert solver.stats["fallback_groups"] < k // 4

@@ -210,3 +210,22 @@ def test_open_items_refined_with_nearby_groups(monkeypatch):
     assert solver.stats["uncertified_vertices"] > 0
     # the open items were decided by local refinement, not by global solves of all groups
     assert solver.stats["fallback_groups"] < k // 4
+
+
+def test_clusters_join_near_items_within_a_part():
+    import scipy.sparse as sp
+
+    from igl_heatseg.fastheat import _clusters
+
+    # a path graph 0-1-2-...-29
+    n = 30
+    P = sp.diags([np.ones(n - 1), np.ones(n - 1)], [-1, 1], format="csr", dtype=np.int8)
+    item = np.array([0, 3, 20, 29, 3])
+    split = np.zeros(n, dtype=np.int64)
+    count, cl = _clusters(P, item, 2, split)  # joined when at most 4 hops apart
+    assert count == 3
+    assert cl[0] == cl[1] == cl[4] and len({cl[0], cl[2], cl[3]}) == 3
+    split[2:] = 1  # vertex 0 and vertex 3 now lie in different parts
+    count, cl = _clusters(P, item, 2, split)
+    assert count == 4 and cl[0] != cl[1] and cl[1] == cl[4]
+    assert _clusters(P, np.zeros(0, dtype=np.int64), 2, split)[0] == 0

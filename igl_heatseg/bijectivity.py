@@ -123,12 +123,48 @@ class Certificate:
 
 
 def _exact_orient(a, b, c) -> int:
-    """Exact sign of the orientation determinant of three 2D points (python floats)."""
+    """Exact sign of the orientation determinant of three 2D points (python floats).
+
+    Reference implementation (rational arithmetic); :func:`_exact_orient_many` is the
+    vectorised one used by :func:`_orient`.
+    """
     ax, ay = Fraction(a[0]), Fraction(a[1])
     bx, by = Fraction(b[0]), Fraction(b[1])
     cx, cy = Fraction(c[0]), Fraction(c[1])
     d = (ax - cx) * (by - cy) - (ay - cy) * (bx - cx)
     return (d > 0) - (d < 0)
+
+
+def _exact_orient_many(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Exact signs of ``orient2d(A, B, C)`` for rows of finite (k, 2) float64 arrays.
+
+    Every double is ``mantissa * 2**exponent`` with an integer mantissa of at most 53 bits
+    (``np.frexp``).  Per row, all six coordinates are written over the row's smallest exponent
+    as exact integers (numpy object arrays of Python ints), so the determinant is evaluated
+    without rounding; scaling a row by a positive power of two does not change its sign.
+    Equivalent to :func:`_exact_orient` row by row, and ~50x faster in bulk (a collapsed map
+    of an 11.8k-face chart sends every triangle here: 0.33 s with fractions).
+
+    Returns
+    -------
+    sign : (k,) int8
+    """
+    k = A.shape[0]
+    if k == 0:
+        return np.zeros(0, dtype=np.int8)
+    X = np.concatenate([A, B, C], axis=1)  # (k, 6): ax ay bx by cx cy
+    mant, expo = np.frexp(X)
+    mi = np.ldexp(mant, 53).astype(np.int64)  # exact: 53-bit mantissas
+    expo = expo.astype(np.int64) - 53
+    nonzero = mi != 0
+    big = np.iinfo(np.int64).max
+    emin = np.where(nonzero, expo, big).min(axis=1)
+    emin = np.where(emin == big, 0, emin)
+    shift = np.where(nonzero, expo - emin[:, None], 0)
+    Z = mi.astype(object) * np.left_shift(np.ones_like(shift, dtype=object), shift.astype(object))
+    ax, ay, bx, by, cx, cy = (Z[:, j] for j in range(6))
+    d = (ax - cx) * (by - cy) - (ay - cy) * (bx - cx)
+    return (d > 0).astype(np.int8) - (d < 0).astype(np.int8)
 
 
 def _orient(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -147,8 +183,8 @@ def _orient(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np
     bound = _CCW_ERRBOUND * (np.abs(detleft) + np.abs(detright))
     sign = np.sign(det).astype(np.int8)
     unsure = np.flatnonzero(~(np.abs(det) > bound))
-    for k in unsure.tolist():
-        sign[k] = _exact_orient(A[k].tolist(), B[k].tolist(), C[k].tolist())
+    if len(unsure):
+        sign[unsure] = _exact_orient_many(A[unsure], B[unsure], C[unsure])
     return sign, det
 
 
@@ -362,6 +398,7 @@ def certify_map(
     *,
     degenerate_tol: float = UV_DEGENERATE_TOL,
     name: str = "chart",
+    loops: list[np.ndarray] | None = None,
 ) -> Certificate:
     """Certify that a 2D map of a triangulated disk chart is bijective.
 
@@ -376,6 +413,10 @@ def certify_map(
         Relative tolerance for near-zero image areas, see :data:`UV_DEGENERATE_TOL`.
     name : str
         Chart name used in error messages.
+    loops : list of (b_i,) int64 arrays, optional
+        The boundary loops of ``F`` (:func:`igl_heatseg.topology.boundary_loops`), when the
+        caller certifies many maps of one chart (saves about a third of the time on a
+        12k-face chart); computed when omitted.  Not checked: they must be ``F``'s.
 
     Returns
     -------
@@ -436,7 +477,8 @@ def certify_map(
     degenerate = np.flatnonzero((sign == 0) | (2.0 * np.abs(area) <= degenerate_tol * longest2))
     flipped = np.setdiff1d(flipped, degenerate)
 
-    loops = boundary_loops(F)
+    if loops is None:
+        loops = boundary_loops(F)
     if loops:
         edges = np.concatenate([np.stack([lp, np.roll(lp, -1)], axis=1) for lp in loops])
     else:

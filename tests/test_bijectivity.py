@@ -8,6 +8,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from igl_heatseg.bijectivity import (
+    _exact_orient,
+    _exact_orient_many,
     boundary_self_intersections,
     certify_map,
     signed_areas,
@@ -191,6 +193,56 @@ def test_tiny_near_collinear_triangle_sign_is_exact():
     assert sign[0] == 1
     _, sign = signed_areas(UV, np.array([[0, 2, 1]]))
     assert sign[0] == -1
+
+
+_COORDS = st.one_of(
+    st.sampled_from([0.0, -0.0, 5e-324, -5e-324, 2.0**-1022, 1e-300, 1.0, -1.0, 0.5, 3.0, 1e300]),
+    st.floats(allow_nan=False, allow_infinity=False, width=64),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.lists(_COORDS, min_size=6, max_size=6), min_size=1, max_size=8))
+def test_vectorised_exact_orientation_matches_rationals(rows):
+    """The integer (object array) evaluation equals the rational one, extremes included."""
+    X = np.array(rows, dtype=np.float64)
+    A, B, C = X[:, 0:2], X[:, 2:4], X[:, 4:6]
+    ref = [
+        _exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
+    ]
+    assert _exact_orient_many(A, B, C).tolist() == ref
+
+
+def test_vectorised_exact_orientation_on_near_collinear_points():
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(500, 2))
+    B = rng.normal(size=(500, 2))
+    C = A + rng.normal(size=(500, 1)) * (B - A)  # collinear up to rounding
+    C[::3] = A[::3]  # exactly coincident: orientation 0
+    got = _exact_orient_many(A, B, C)
+    ref = [
+        _exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
+    ]
+    assert got.tolist() == ref
+    assert np.all(got[::3] == 0) and np.any(got != 0)
+
+
+def test_collapsed_map_is_certified_quickly_and_exactly():
+    """Every triangle of a map collapsed onto a line is degenerate (all signs decided exactly
+    in the vectorised path)."""
+    UV, F = grid(40, 40)
+    line = np.c_[UV[:, 0] + 0.3 * UV[:, 1], 2.0 * (UV[:, 0] + 0.3 * UV[:, 1])]
+    cert = certify_map(line, F)
+    assert cert.degenerate == F.shape[0] and cert.flips == 0 and not cert.bijective
+
+
+def test_given_boundary_loops_give_the_same_certificate():
+    UV, F = grid(8, 7)
+    for W in (UV, spiral(UV, 1.05), UV * [-1, 1]):
+        a = certify_map(W, F)
+        b = certify_map(W, F, loops=boundary_loops(F))
+        assert a.summary() == b.summary()
+        assert np.array_equal(a.overlap_edges, b.overlap_edges)
 
 
 def test_wound_vertex_is_caught():

@@ -24,11 +24,13 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
    at most :data:`REPAIR_MAX_SD_RATIO` is ``"hessian-<energy>+repair"``.
 6. Otherwise: a convex-combination map (Floater's mean value weights, boundary on a circle
    by arc length) is bijective by construction (Tutte, Floater); it is improved by SLIM
-   (symmetric Dirichlet), all iterations at once or, if that result fails the certificate,
-   one iteration at a time with the certificate after each, keeping the last bijective map.
-   Free boundary first; if its boundary starts to overlap before the last iteration, SLIM
-   with the boundary held on the circle is tried too, and the lower energy wins
-   (``"tutte+slim"`` / ``"tutte+slim-fixed"``).
+   (symmetric Dirichlet, free boundary), one iteration at a time with the certificate after
+   each, keeping the last bijective iterate (``"tutte+slim"``); only if no iterate is
+   bijective, SLIM with the boundary held on the circle (``"tutte+slim-fixed"``).
+
+Under ``energy="auto"``, step 2 starts with a free test: charts whose total absolute Gaussian
+curvature exceeds :data:`HLLE_SKIP_CURVATURE` (noisy scans, strongly doubly curved charts)
+skip HLLE and go to the curved Hessian; the skip is recorded in ``attempts``.
 
 Distortion measures (:func:`distortion`), all after a global scale normalisation that makes the
 total image area equal the total 3D area; per-triangle Jacobian ``J`` (3D triangle in its own
@@ -45,7 +47,11 @@ by the certificate, not here).
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import dataclasses
 import logging
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Iterable, Literal, Sequence
@@ -72,12 +78,16 @@ __all__ = [
     "tutte_map",
     "repair_map",
     "distortion",
+    "total_abs_curvature",
+    "limit_blas_threads",
     "compare_methods",
     "METHODS",
     "PIPELINE_METHODS",
     "NULLSPACE_TOL",
     "EIGEN_SHIFT",
     "DENSE_EIGEN_MAX",
+    "HLLE_SKIP_CURVATURE",
+    "BLAS_THREADS",
 ]
 
 log = logging.getLogger(__name__)
@@ -119,6 +129,17 @@ REPAIR_MAX_SD_RATIO: float = 1.05
 
 #: Soft-constraint weight holding the boundary in the fixed-boundary SLIM variant.
 SLIM_SOFT_P: float = 1e5
+
+#: ``energy="auto"`` skips the HLLE map of a chart whose total absolute Gaussian curvature
+#: (:func:`total_abs_curvature`, the sum of the absolute angle defects of its interior
+#: vertices; scale-invariant) exceeds this: ``8 pi``, a Gauss image covering the sphere twice.
+#: Measured on the 219 charts of 18 meshes (fandisk, block, the shared data set's mechanical,
+#: organic and scan meshes): no HLLE map above 13.3 was bijective (the largest among the 123
+#: bijective ones: block chart 0, 13.2; then psb_352_bearing chart 0, 9.1); all 31 charts
+#: above 8 pi failed HLLE (flips or a collapsed map), among them 17 of iron.ply's 41 scan
+#: charts (noise makes every angle defect count: 131k of its 160k faces; 6.2 of 7.6 s of
+#: failed HLLE attempts).  The skip is recorded in ``attempts``.
+HLLE_SKIP_CURVATURE: float = 8.0 * np.pi
 
 #: Full :func:`parameterize_chart` runs (with repair and fallbacks) known to
 #: :func:`compare_methods`.
@@ -199,6 +220,87 @@ class ChartParam:
         }
 
 
+#: OpenBLAS threads while :func:`parameterize_chart` runs (``None``: leave as is).  Its
+#: work is many small BLAS calls (Lanczos vectors, dense eigen-solves of small charts,
+#: batched 3 x k pseudo-inverses) that gain nothing from a second thread, and when the other
+#: core is busy every threaded call waits for a time slice.  Measured on the 2-core machine
+#: with one busy process on the other core (all charts of a run, best of 1): iron.ply
+#: 40.5 s with OpenBLAS's default 2 threads, 14.1 s with 1; fandisk 24.0 s vs 1.7 s (a
+#: 492-vertex dense eigen-solve: 0.04 s vs up to 3.4 s); with the other core idle 1 thread
+#: was as fast (11.0 vs 11.8 s on iron).
+BLAS_THREADS: int | None = 1
+
+_blas_controls: list | None = None
+
+
+def _openblas_controls() -> list:
+    """``(get, set)`` thread-count functions of every OpenBLAS loaded in this process.
+
+    Linux only (found through ``/proc/self/maps``, opened with ``RTLD_NOLOAD``: nothing new
+    is loaded); an empty list elsewhere or for other BLAS libraries.  Cached.
+    """
+    global _blas_controls
+    if _blas_controls is not None:
+        return _blas_controls
+    controls = []
+    try:
+        with open("/proc/self/maps") as fh:
+            paths = sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
+    except OSError:
+        paths = []
+    names = [
+        (f"{pre}_get_num_threads{suf}", f"{pre}_set_num_threads{suf}")
+        for pre in ("openblas", "scipy_openblas")
+        for suf in ("", "64_")
+    ]
+    for path in paths:
+        try:
+            lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_LOCAL)
+        except OSError:
+            continue
+        for get_name, set_name in names:
+            get = getattr(lib, get_name, None)
+            put = getattr(lib, set_name, None)
+            if get is not None and put is not None:
+                get.restype = ctypes.c_int
+                get.argtypes = []
+                put.restype = None
+                put.argtypes = [ctypes.c_int]
+                controls.append((get, put))
+                break
+    _blas_controls = controls
+    return controls
+
+
+@contextlib.contextmanager
+def limit_blas_threads(threads: int | None = BLAS_THREADS):
+    """Context manager: at most ``threads`` OpenBLAS threads inside, restored on exit.
+
+    Parameters
+    ----------
+    threads : int or None
+        Thread count (``None`` or no OpenBLAS found: does nothing).  Applies to every
+        OpenBLAS loaded in the process (numpy's and scipy's), process-wide.
+
+    Examples
+    --------
+    >>> with limit_blas_threads(1):
+    ...     pass
+    """
+    controls = _openblas_controls() if threads is not None else []
+    old = []
+    try:
+        for get, put in controls:
+            n = int(get())
+            old.append((put, n))
+            if n > threads:
+                put(int(threads))
+        yield
+    finally:
+        for put, n in old:
+            put(n)
+
+
 # --------------------------------------------------------------------------- input
 
 
@@ -248,6 +350,39 @@ def _edges(F: np.ndarray) -> np.ndarray:
     n = int(F.max()) + 1
     key = np.unique(E[:, 0] * n + E[:, 1])
     return np.stack([key // n, key % n], axis=1)
+
+
+def total_abs_curvature(V: ArrayLike, F: ArrayLike, bnd: np.ndarray | None = None) -> float:
+    """Total absolute Gaussian curvature of a chart: ``sum |2 pi - angle sum|`` over interior
+    vertices.
+
+    Zero on a developable (intrinsically flat) chart, about ``integral |K| dA`` on a smooth
+    one, and large on noisy scans (every vertex's angle defect counts).  Scale-invariant.
+    :func:`parameterize_chart` uses it to skip HLLE under ``energy="auto"`` (see
+    :data:`HLLE_SKIP_CURVATURE`).
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles (every vertex used).
+    bnd : (b,) int64, optional
+        Boundary vertices (every boundary loop's); computed when omitted.
+
+    Returns
+    -------
+    float
+        In radians.
+    """
+    V, F = as_mesh_arrays(V, F, "total_abs_curvature")
+    if bnd is None:
+        loops = boundary_loops(F)
+        bnd = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int64)
+    k = np.asarray(igl.gaussian_curvature(V, F), dtype=np.float64).ravel()
+    inner = np.ones(V.shape[0], dtype=bool)
+    inner[bnd] = False
+    return float(np.abs(k[inner]).sum())
 
 
 # --------------------------------------------------------------------------- Hessian map
@@ -582,38 +717,43 @@ def _slim_guarded(
     iterations: int,
     name: str,
     bnd: np.ndarray | None = None,
-) -> tuple[np.ndarray, Certificate | None, int]:
+    loops: list[np.ndarray] | None = None,
+) -> tuple[np.ndarray, Certificate | None, int, int]:
     """SLIM one iteration at a time from a bijective start; keep the last bijective iterate.
 
-    SLIM's line search prevents flips but not boundary overlaps (free boundary).  All
-    iterations are run first; if the result fails the certificate, SLIM is rerun one iteration
-    at a time with the certificate after each and stopped at the last bijective map.  With
-    ``bnd`` the boundary is held (soft constraint, :data:`SLIM_SOFT_P`) at its start positions.
+    SLIM's line search prevents flips but not boundary overlaps (free boundary), and an
+    overlap can be transient: every iterate is certified and the result is the *last*
+    bijective one, the one with the lowest energy (SLIM's energy decreases monotonically).
+    Measured on the 20 charts of the shared data set that fall back to Tutte + SLIM, 30
+    iterations: 7 have non-bijective iterates; on 5 of them a later iterate is bijective again
+    (iron.ply chart 1: iterate 3 overlaps, 4-22 are bijective; stopping at the first
+    non-bijective iterate kept iterate 2, symmetric Dirichlet 13.7 instead of 4.01; on
+    abc_00007974_5's two charts no iterate before the first overlap was bijective and the
+    fixed-boundary variant's 33.4 and 15.7 were kept instead of 4.05 and 4.09).  Certifying
+    every iterate costs about a third of an iteration (boundary loops passed in); the
+    previous scheme (all iterations, then again one at a time when the result failed) cost
+    two SLIM runs whenever an overlap occurred.  With ``bnd`` the boundary is held (soft
+    constraint, :data:`SLIM_SOFT_P`) at its start positions.
 
     Returns
     -------
     UV : (n, 2) float64
         Last bijective iterate (``UV0`` when none was).
     cert : Certificate or None
-        Its certificate (``None`` when no iteration was accepted).
+        Its certificate (``None`` when no iterate was bijective).
     accepted : int
-        Number of accepted iterations.
+        Index (1-based) of the kept iterate, 0 when none.
+    bijective_iterates : int
+        Number of bijective iterates.
     """
     bc = UV0[bnd] if bnd is not None else None
     try:
-        # Optimistic: all iterations at once, one certificate.
-        data = _slim_data(V, F, UV0, bnd, bc)
-        UV = np.ascontiguousarray(igl.slim_solve(data, iterations)[:, :2])
-        if np.all(np.isfinite(UV)):
-            UV, cert = _finish(UV, V, F, name)
-            if cert.bijective:
-                return UV, cert, iterations
         data = _slim_data(V, F, UV0, bnd, bc)
     except RuntimeError as exc:  # pragma: no cover - libigl failure
         log.warning("%s: SLIM failed: %s", name, exc)
-        return UV0, None, 0
-    best, best_cert, accepted = UV0, None, 0
-    for _ in range(iterations):
+        return UV0, None, 0, 0
+    best, best_cert, accepted, good = UV0, None, 0, 0
+    for it in range(1, iterations + 1):
         try:
             UV = np.ascontiguousarray(igl.slim_solve(data, 1)[:, :2])
         except RuntimeError as exc:  # pragma: no cover - libigl failure
@@ -621,11 +761,10 @@ def _slim_guarded(
             break
         if not np.all(np.isfinite(UV)):
             break
-        UV, cert = _finish(UV, V, F, name)
-        if not cert.bijective:
-            break
-        best, best_cert, accepted = UV, cert, accepted + 1
-    return best, best_cert, accepted
+        UV, cert = _finish(UV, V, F, name, loops)
+        if cert.bijective:
+            best, best_cert, accepted, good = UV, cert, it, good + 1
+    return best, best_cert, accepted, good
 
 
 def _harmonic(V, F, bnd):
@@ -716,12 +855,18 @@ def distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> dict:
 # --------------------------------------------------------------------------- entry points
 
 
-def _finish(UVc, Vn, Fc, name):
-    """Certify, undo a mirror image, certify again if mirrored."""
-    cert = certify_map(UVc, Fc, name=name)
+def _finish(UVc, Vn, Fc, name, loops=None):
+    """Certify; undo a mirror image (``u -> -u``) and return its certificate.
+
+    The mirror's certificate is the same one with ``mirrored=False``: negating ``u`` negates
+    every orientation determinant exactly (IEEE negation and products), so flips, degenerate
+    triangles, boundary intersections and windings are unchanged (checked by
+    ``tests/test_param.py``); it is not recomputed.
+    """
+    cert = certify_map(UVc, Fc, name=name, loops=loops)
     if cert.mirrored:
         UVc = UVc * np.array([-1.0, 1.0])
-        cert = certify_map(UVc, Fc, name=name)
+        cert = dataclasses.replace(cert, mirrored=False, orientation=1)
     return UVc, cert
 
 
@@ -787,7 +932,8 @@ def map_chart(
     V_in = np.asarray(V)
     Vn, Fc, used, scale, bnd = _prepare_chart(V, F, name)
     try:
-        UVc, lam = _run(method, Vn, Fc, bnd, name, energy_kwargs)
+        with limit_blas_threads(BLAS_THREADS):
+            UVc, lam = _run(method, Vn, Fc, bnd, name, energy_kwargs)
     except RuntimeError as exc:
         raise MeshError(f"{name}: {method} failed in libigl/scipy: {exc}") from None
     if not np.all(np.isfinite(UVc)):
@@ -817,6 +963,7 @@ def parameterize_chart(
     fallback: Literal["tutte+slim", "tutte", "none"] = "tutte+slim",
     slim_iterations: int = SLIM_ITERATIONS,
     repair: bool = True,
+    hlle_skip_curvature: float | None = HLLE_SKIP_CURVATURE,
     name: str = "chart",
     **energy_kwargs,
 ) -> ChartParam:
@@ -833,17 +980,25 @@ def parameterize_chart(
         Hessian energy: the paper's HLLE (:func:`~igl_heatseg.hessian.hlle_energy`), libigl's
         curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`), or ``"auto"``:
         HLLE, and the curved Hessian when the HLLE map is not bijective (HLLE is the more
-        accurate on creased CAD charts, the curved Hessian the more robust on scans).
+        accurate on creased CAD charts, the curved Hessian the more robust on scans).  Under
+        ``"auto"``, HLLE is skipped (straight to the curved Hessian) on charts whose
+        :func:`total_abs_curvature` exceeds ``hlle_skip_curvature``.
     fallback : {"tutte+slim", "tutte", "none"}
         What to do when the Hessian map is not bijective: a Tutte map (bijective by
-        construction), optionally improved by SLIM keeping only certified-bijective iterates
-        (free boundary, then boundary held on the circle); or nothing (return the
-        non-bijective Hessian map, flagged).
+        construction), optionally improved by SLIM keeping the last certified-bijective
+        iterate (free boundary; with the boundary held on the circle only when no
+        free-boundary iterate is bijective); or nothing (return the non-bijective Hessian
+        map, flagged).
     slim_iterations : int
         SLIM iterations for ``"tutte+slim"``.
     repair : bool
         Before falling back, try :func:`repair_map` on a Hessian map with local flips (no
         boundary overlaps); if that is bijective the method is ``"hessian-<energy>+repair"``.
+    hlle_skip_curvature : float or None
+        ``energy="auto"`` only: skip HLLE when the chart's total absolute Gaussian curvature
+        is above this (default :data:`HLLE_SKIP_CURVATURE`, ``8 pi``; measured: HLLE was never
+        bijective above 13.3).  The skipped attempt is listed in ``attempts`` with
+        ``"skipped": True`` and the ``reason``.  ``None`` never skips.
     name : str
         Chart name for messages.
     **energy_kwargs
@@ -874,6 +1029,23 @@ def parameterize_chart(
     >>> res.method, res.bijective, round(res.distortion["sym_dirichlet"], 6)
     ('hessian-hlle', True, 4.0)
     """
+    with limit_blas_threads(BLAS_THREADS):
+        return _parameterize_chart(
+            V,
+            F,
+            energy,
+            fallback=fallback,
+            slim_iterations=slim_iterations,
+            repair=repair,
+            hlle_skip_curvature=hlle_skip_curvature,
+            name=name,
+            energy_kwargs=energy_kwargs,
+        )
+
+
+def _parameterize_chart(
+    V, F, energy, *, fallback, slim_iterations, repair, hlle_skip_curvature, name, energy_kwargs
+) -> ChartParam:
     if energy not in ("hlle", "curved", "auto"):
         raise MeshError(f"{name}: `energy` must be 'hlle', 'curved' or 'auto', got {energy!r}")
     if fallback not in ("tutte+slim", "tutte", "none"):
@@ -885,7 +1057,25 @@ def parameterize_chart(
     Vn, Fc, used, scale, bnd = _prepare_chart(V, F, name)
     attempts = []
     tries = []  # (UV, cert, method, eigenvalues) of every Hessian map computed
-    for en in ("hlle", "curved") if energy == "auto" else (energy,):
+    energies: tuple[str, ...] = ("hlle", "curved") if energy == "auto" else (energy,)
+    tac = None
+    if energy == "auto" and hlle_skip_curvature is not None:
+        t = time.perf_counter()
+        tac = total_abs_curvature(Vn, Fc, bnd)
+        if tac > hlle_skip_curvature:
+            energies = ("curved",)
+            attempts.append(
+                {
+                    "method": "hessian-hlle",
+                    "skipped": True,
+                    "bijective": False,
+                    "reason": f"total absolute curvature {tac:.3g} > {hlle_skip_curvature:.3g}: "
+                    "HLLE predicted to flip (HLLE_SKIP_CURVATURE)",
+                    "total_abs_curvature": tac,
+                    "seconds": time.perf_counter() - t,
+                }
+            )
+    for en in energies:
         meth = f"hessian-{en}"
         t = time.perf_counter()
         try:
@@ -898,12 +1088,13 @@ def parameterize_chart(
             log.warning("%s: %s eigen-solve failed: %s", name, meth, exc)
             ok = False
         if ok:
-            UVh, cert_h = _finish(UVh, Vn, Fc, name)
+            UVh, cert_h = _finish(UVh, Vn, Fc, name, [bnd])
             attempts.append(
                 {
                     "method": meth,
                     **cert_h.summary(),
                     "null_dim": null_dim,
+                    **({"total_abs_curvature": tac} if tac is not None and en == "hlle" else {}),
                     "seconds": time.perf_counter() - t,
                 }
             )
@@ -966,39 +1157,41 @@ def parameterize_chart(
     if used_fallback and not repaired:
         t = time.perf_counter()
         UVt = tutte_map(Vn, Fc, bnd)
-        UVt, cert_t = _finish(UVt, Vn, Fc, name)
+        UVt, cert_t = _finish(UVt, Vn, Fc, name, [bnd])
         attempts.append({"method": "tutte", **cert_t.summary(), "seconds": time.perf_counter() - t})
         UVc, cert, method = UVt, cert_t, "tutte"
         if fallback == "tutte+slim" and cert_t.bijective and slim_iterations > 0:
-            # Free boundary first; if the boundary starts to overlap before the last iteration,
-            # also try with the boundary held on the circle, and keep the lower energy.
+            # Free boundary first, keeping its last bijective iterate; only if none of its
+            # iterates is bijective, SLIM with the boundary held on the circle.
             t = time.perf_counter()
-            UVs, cert_s, acc = _slim_guarded(Vn, Fc, UVt, slim_iterations, name)
+            UVs, cert_s, acc, good = _slim_guarded(Vn, Fc, UVt, slim_iterations, name, loops=[bnd])
             attempts.append(
                 {
                     "method": "tutte+slim",
                     "accepted_iterations": acc,
+                    "bijective_iterations": good,
                     **(cert_s.summary() if cert_s else cert_t.summary()),
                     "seconds": time.perf_counter() - t,
                 }
             )
-            options = [(UVs, cert_s, "tutte+slim")] if acc > 0 else []
-            if acc < slim_iterations:
+            if acc > 0:
+                UVc, cert, method = UVs, cert_s, "tutte+slim"
+            else:
                 t = time.perf_counter()
-                UVf, cert_f, acc_f = _slim_guarded(Vn, Fc, UVt, slim_iterations, name, bnd)
+                UVf, cert_f, acc_f, good_f = _slim_guarded(
+                    Vn, Fc, UVt, slim_iterations, name, bnd, loops=[bnd]
+                )
                 attempts.append(
                     {
                         "method": "tutte+slim-fixed",
                         "accepted_iterations": acc_f,
+                        "bijective_iterations": good_f,
                         **(cert_f.summary() if cert_f else cert_t.summary()),
                         "seconds": time.perf_counter() - t,
                     }
                 )
                 if acc_f > 0:
-                    options.append((UVf, cert_f, "tutte+slim-fixed"))
-            if options:
-                sd = [distortion(Vn, Fc, o[0])["sym_dirichlet"] for o in options]
-                UVc, cert, method = options[int(np.argmin(sd))]
+                    UVc, cert, method = UVf, cert_f, "tutte+slim-fixed"
         if not cert.bijective:
             log.warning("%s: fallback map is not bijective either (%s)", name, cert.summary())
         if method == "tutte":  # arbitrary scale: match the chart's area

@@ -7,13 +7,16 @@ import pytest
 
 from igl_heatseg.errors import MeshError
 from igl_heatseg.param import (
+    HLLE_SKIP_CURVATURE,
     METHODS,
     compare_methods,
     distortion,
     gram_correction,
+    limit_blas_threads,
     map_chart,
     parameterize_chart,
     repair_map,
+    total_abs_curvature,
     tutte_map,
 )
 
@@ -198,6 +201,83 @@ def test_auto_energy_tries_hlle_then_curved():
     res = parameterize_chart(V, F, "auto")
     assert [a["method"] for a in res.attempts][:2] == ["hessian-hlle", "hessian-curved"]
     assert res.bijective and res.fallback_used
+
+
+def noisy_grid(n=24, noise=0.3, seed=2):
+    """A flat grid with normal noise (a scan-like chart): large total absolute curvature."""
+    V, F = grid(n, n)
+    V[:, 2] = np.random.default_rng(seed).normal(0.0, noise / n, V.shape[0])
+    return V, F
+
+
+def test_total_abs_curvature():
+    V, F = grid(6, 5, jitter=0.2)
+    assert total_abs_curvature(V, F) < 1e-12
+    V, F, _ = cylinder_patch(8, 4)
+    assert total_abs_curvature(V, F) < 1e-9  # developable
+    a = 1.0
+    V, F = sphere_cap(a, nr=24, nt=64)
+    # Gauss-Bonnet: the interior angle defects sum to ~ the cap's area 2 pi (1 - cos a)
+    assert total_abs_curvature(V, F) == pytest.approx(2 * np.pi * (1 - np.cos(a)), rel=0.05)
+    assert total_abs_curvature(*noisy_grid()) > HLLE_SKIP_CURVATURE
+
+
+def test_auto_energy_skips_hlle_on_scan_like_charts():
+    V, F = noisy_grid()
+    res = parameterize_chart(V, F, "auto")
+    first = res.attempts[0]
+    assert first["method"] == "hessian-hlle" and first["skipped"] and not first["bijective"]
+    assert first["total_abs_curvature"] > HLLE_SKIP_CURVATURE and "reason" in first
+    assert res.attempts[1]["method"] == "hessian-curved"
+    assert res.bijective
+    # never skipped when asked for HLLE, or with the test turned off
+    res = parameterize_chart(V, F, "hlle")
+    assert "skipped" not in res.attempts[0]
+    res = parameterize_chart(V, F, "auto", hlle_skip_curvature=None)
+    assert "skipped" not in res.attempts[0] and res.attempts[0]["method"] == "hessian-hlle"
+    # flat and developable charts keep HLLE (curvature recorded)
+    res = parameterize_chart(*grid(6, 5, jitter=0.2), "auto")
+    assert res.method == "hessian-hlle" and res.attempts[0]["total_abs_curvature"] < 1e-9
+
+
+def test_mirrored_certificate_is_the_recomputed_one():
+    """_finish turns a mirror image over without certifying it again: same certificate."""
+    from igl_heatseg.bijectivity import certify_map
+    from igl_heatseg.param import _finish
+
+    V, F = sphere_cap(2.4)
+    for UV in (tutte_map(V, F), map_chart(V, F, "hessian-hlle", name="c").UV):
+        M = UV * [-1.0, 1.0]
+        assert certify_map(M, F).mirrored
+        UVf, cert = _finish(M, V, F, "c")
+        ref = certify_map(UVf, F)
+        assert not cert.mirrored and cert.orientation == 1
+        assert cert.summary() == ref.summary()
+        for key in ("flipped_faces", "degenerate_faces", "overlap_edges", "wound_vertices"):
+            assert np.array_equal(getattr(cert, key), getattr(ref, key))
+
+
+def test_slim_fallback_records_its_iterations():
+    V, F = sphere_cap(2.4)
+    res = parameterize_chart(V, F, "curved")
+    slim = [a for a in res.attempts if a["method"].startswith("tutte+slim")]
+    assert slim and slim[0]["method"] == "tutte+slim"
+    assert 0 <= slim[0]["accepted_iterations"] <= 30
+    assert slim[0]["bijective_iterations"] <= 30
+    # the fixed-boundary variant only when no free-boundary iterate is bijective
+    assert (len(slim) == 2) == (slim[0]["accepted_iterations"] == 0)
+    assert res.bijective
+
+
+def test_limit_blas_threads_restores_the_thread_count():
+    from igl_heatseg.param import _openblas_controls
+
+    before = [get() for get, _ in _openblas_controls()]
+    with limit_blas_threads(1):
+        assert all(get() == 1 for get, _ in _openblas_controls())
+    assert [get() for get, _ in _openblas_controls()] == before
+    with limit_blas_threads(None):
+        assert [get() for get, _ in _openblas_controls()] == before
 
 
 @pytest.mark.parametrize("weights", ["mean_value", "uniform"])

@@ -57,6 +57,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import igl
 import numpy as np
@@ -146,6 +147,10 @@ _CHOLESPY_MIN_RHS = 80
 #: solves), 15 left 1 and 3, 20 left none (refinement 0.25 s); 30 costs 0.3-1 s more.
 REFINE_HOPS: int = 20
 
+#: Deeper refinement passes (domains 2x, 3x, ... ``refine_halo``) for the items whose
+#: possible winners are still too close to call, before the exact global fallback.
+REFINE_PASSES: int = 2
+
 #: Refinement clusters never span more than this many consecutive patches (Morton order), so
 #: that a mesh with uncertified items everywhere does not refine in one mesh-wide domain with
 #: hundreds of right-hand sides (noisy 50k mesh: refinement 0.61 s in one cluster, 0.33-0.40 s
@@ -215,6 +220,22 @@ class _Factor:
 # the solver
 
 
+class _Refined(NamedTuple):
+    """What :meth:`FastHeatSolver._refine` decided (see there)."""
+
+    ok_v: np.ndarray
+    lab_v: np.ndarray
+    max_v: np.ndarray
+    ok_f: np.ndarray
+    lab_f: np.ndarray
+    win_v: tuple
+    win_f: tuple
+    wide_v: np.ndarray
+    wide_f: np.ndarray
+    beat_v: np.ndarray
+    beat_f: np.ndarray
+
+
 class FastHeatSolver:
     """Argmax labels of the heat fields of many seed groups, by certified local solves.
 
@@ -251,8 +272,12 @@ class FastHeatSolver:
         Number of groups.
     stats : dict
         Filled by :meth:`labels`: ``mode`` (``"exact"`` or ``"local"``), ``patches``,
-        ``domain_vertices`` (sum of domain sizes), ``uncertified_vertices``,
-        ``uncertified_faces``, ``fallback_groups`` (groups solved exactly), and timings.
+        ``domain_vertices`` (sum of domain sizes), ``uncertified_vertices`` and
+        ``uncertified_faces`` (after the patch solves), ``open_items`` (of those, where a
+        group outside the top-K may win), ``refined_groups``, ``refine_pass2_items`` ...
+        (items left to the deeper refinement passes), ``exact_vertices``, ``exact_faces``
+        (left to the exact fallback), ``exact_wide`` (of those, where any nearby group may
+        win), ``fallback_groups`` (groups solved exactly), and timings (``*_s``).
 
     Raises
     ------
@@ -652,6 +677,7 @@ class FastHeatSolver:
         # If a rival outside the kept candidates may win, every group is a candidate there.
         open_v = vexc[uv] + slack_v[uv] >= vval[uv, 0]
         open_f = fexc[uf] + slack_f[uf] >= fval[uf, 0]
+        st["open_items"] = int(open_v.sum() + open_f.sum())
         st["certify_s"] = time.perf_counter() - t
         # 4. Refinement: the candidates of the uncertified items are re-solved on domains grown
         #    refine_halo hops around them; bounds from the boundary's harmonic measure.  Where
@@ -660,7 +686,7 @@ class FastHeatSolver:
         t = time.perf_counter()
         pv_i, pv_j = np.nonzero(cand_v & ~open_v[:, None])
         pf_i, pf_j = np.nonzero(cand_f & ~open_f[:, None])
-        ok_v, lab_v, max_v, ok_f, lab_f, win_v, win_f, wide_v, wide_f = self._refine(
+        r = self._refine(
             uv,
             vid[uv][pv_i, pv_j],
             pv_i,
@@ -674,15 +700,65 @@ class FastHeatSolver:
             np.maximum(np.where(cand_v, -np.inf, vval[uv]).max(axis=1), vexc[uv]) + slack_v[uv],
             np.maximum(np.where(cand_f, -np.inf, fval[uf]).max(axis=1), fexc[uf]) + slack_f[uf],
         )
+        st["refined_groups"] = len(np.union1d(vid[uv][pv_i, pv_j], fid[uf][pf_i, pf_j]))
+        ok_v, lab_v, max_v, ok_f, lab_f = r.ok_v, r.lab_v, r.max_v, r.ok_f, r.lab_f
+        win_v, win_f, wide_v, wide_f = r.win_v, r.win_f, r.wide_v, r.wide_f
+        beat_v, beat_f = r.beat_v, r.beat_f
+        # Deeper passes for items whose few possible winners are too close to call: only
+        # those winners are re-solved; every other group stays below `beat`.
+        for depth in range(2, 2 + REFINE_PASSES):
+            lv = np.flatnonzero(~ok_v & ~wide_v)
+            lf = np.flatnonzero(~ok_f & ~wide_f)
+            if self.refine_halo == 0 or not (len(lv) or len(lf)):
+                break
+            mv = np.full(len(uv), -1, dtype=np.int64)
+            mv[lv] = np.arange(len(lv))
+            mf = np.full(len(uf), -1, dtype=np.int64)
+            mf[lf] = np.arange(len(lf))
+            kv = mv[win_v[0]] >= 0
+            kf = mf[win_f[0]] >= 0
+            r = self._refine(
+                uv[lv],
+                win_v[1][kv],
+                mv[win_v[0][kv]],
+                np.zeros(len(lv), dtype=bool),
+                uf[lf],
+                win_f[1][kf],
+                mf[win_f[0][kf]],
+                np.zeros(len(lf), dtype=bool),
+                fc,
+                patch // _REFINE_SPLIT,
+                beat_v[lv],
+                beat_f[lf],
+                halo=depth * self.refine_halo,
+            )
+            ok_v[lv], lab_v[lv], max_v[lv], wide_v[lv], beat_v[lv] = (
+                r.ok_v,
+                r.lab_v,
+                r.max_v,
+                r.wide_v,
+                r.beat_v,
+            )
+            ok_f[lf], lab_f[lf], wide_f[lf], beat_f[lf] = r.ok_f, r.lab_f, r.wide_f, r.beat_f
+            # keep the earlier pairs of the items decided or still open; new pairs for the rest
+            win_v = (
+                np.r_[win_v[0][~kv], lv[r.win_v[0]]],
+                np.r_[win_v[1][~kv], r.win_v[1]],
+            )
+            win_f = (
+                np.r_[win_f[0][~kf], lf[r.win_f[0]]],
+                np.r_[win_f[1][~kf], r.win_f[1]],
+            )
+            st[f"refine_pass{depth}_items"] = len(lv) + len(lf)
         vertex_labels[free[uv[ok_v]]] = lab_v[ok_v]
         vertex_max[free[uv[ok_v]]] = max_v[ok_v]
         face_labels[uf[ok_f]] = lab_f[ok_f]
-        st["refined_groups"] = len(np.union1d(vid[uv][pv_i, pv_j], fid[uf][pf_i, pf_j]))
         st["refine_s"] = time.perf_counter() - t
         # The exact fallback solves the groups that may still win where refinement did not
         # decide (by its bounds), and, where a group it did not try may win, all groups near.
         cands = np.union1d(win_v[1][~ok_v[win_v[0]]], win_f[1][~ok_f[win_f[0]]])
         wv, wf = ~ok_v & wide_v, ~ok_f & wide_f
+        st["exact_wide"] = int(wv.sum() + wf.sum())
         if wv.any() or wf.any():
             lost = (vid[uv[wv], 0] < 0).any() or (fid[uf[wf], 0] < 0).any()
             if lost:  # some vertex or face lies in no domain: anything may win there
@@ -790,6 +866,10 @@ class FastHeatSolver:
             best lower bound).
         wide_v (a,) bool, wide_f (b,) bool
             Items where a group that was not tried may still win.
+        beat_v (a,) float64, beat_f (b,) float64
+            Bound on every group not in ``win_v`` / ``win_f`` at each item.
+
+        All returned as a :class:`_Refined`.
         """
         A, B, F, group, nf = self._A, self._B, self.F, self.group, self.nf
         halo = self.refine_halo if halo is None else int(halo)
@@ -805,6 +885,8 @@ class FastHeatSolver:
         lab_f = np.full(b, -1, dtype=np.int64)
         wide_v = np.ones(a, dtype=bool)
         wide_f = np.ones(b, dtype=bool)
+        beat_v = np.full(a, np.inf)
+        beat_f = np.full(b, np.inf)
         win_v, win_f = [], []  # (item, group) pairs that may still win
         fcor = fc[uf]  # (b, 3) free corners of the face items, -1 at seeds
         # Items to refine, one vertex each (a face: its first free corner).
@@ -874,7 +956,9 @@ class FastHeatSolver:
                     rv = loc[uv[ov]]
                     Wv = W[rv]  # (len(ov), len(gids))
                     win_v.append(
-                        _decide_all(Wv, CERT_FACTOR * h[rv], gids, ov, ok_v, lab_v, max_v, wide_v)
+                        _decide_all(
+                            Wv, CERT_FACTOR * h[rv], gids, ov, ok_v, lab_v, max_v, wide_v, beat_v
+                        )
                     )
                 if len(of):
                     cr = fcor[of]
@@ -885,22 +969,30 @@ class FastHeatSolver:
                     Wf = (Wz[rz[:, 0]] + Wz[rz[:, 1]] + Wz[rz[:, 2]] + own) / 3.0
                     hz = np.r_[h, 0.0]
                     gap = CERT_FACTOR * (hz[rz[:, 0]] + hz[rz[:, 1]] + hz[rz[:, 2]]) / 3.0
-                    win_f.append(_decide_all(Wf, gap, gids, of, ok_f, lab_f, None, wide_f))
+                    win_f.append(_decide_all(Wf, gap, gids, of, ok_f, lab_f, None, wide_f, beat_f))
                 loc[D] = -1
         # candidate pairs of the items that are not open
         pv = ~open_v[iv]
         pf = ~open_f[jf]
-        okp, labp, maxp, wp, widep = _decide(a, iv[pv], gv[pv], lo_v[pv], hi_v[pv], rival_v)
+        okp, labp, maxp, wp, widep, beatp = _decide(a, iv[pv], gv[pv], lo_v[pv], hi_v[pv], rival_v)
         sel = ~open_v
-        ok_v[sel], lab_v[sel], max_v[sel], wide_v[sel] = okp[sel], labp[sel], maxp[sel], widep[sel]
+        ok_v[sel], lab_v[sel], max_v[sel] = okp[sel], labp[sel], maxp[sel]
+        wide_v[sel], beat_v[sel] = widep[sel], beatp[sel]
         win_v.append(wp)
-        okp, labp, _, wp, widep = _decide(b, jf[pf], gf[pf], lo_f[pf], hi_f[pf], rival_f)
+        okp, labp, _, wp, widep, beatp = _decide(b, jf[pf], gf[pf], lo_f[pf], hi_f[pf], rival_f)
         sel = ~open_f
-        ok_f[sel], lab_f[sel], wide_f[sel] = okp[sel], labp[sel], widep[sel]
+        ok_f[sel], lab_f[sel], wide_f[sel], beat_f[sel] = (
+            okp[sel],
+            labp[sel],
+            widep[sel],
+            beatp[sel],
+        )
         win_f.append(wp)
         win_v = tuple(np.concatenate(x) for x in zip(*win_v, strict=True))
         win_f = tuple(np.concatenate(x) for x in zip(*win_f, strict=True))
-        return ok_v, lab_v, max_v, ok_f, lab_f, win_v, win_f, wide_v, wide_f
+        return _Refined(
+            ok_v, lab_v, max_v, ok_f, lab_f, win_v, win_f, wide_v, wide_f, beat_v, beat_f
+        )
 
     def _groups_near(self, X, owned, bounds, fv, ff, fc) -> np.ndarray:
         """Groups owned by patches whose domain holds the given free vertices / face corners."""
@@ -996,12 +1088,13 @@ def _face_rows(W, h, loc, cr, cg, gid, col):
     return (wv.sum(axis=1) + isown) / 3.0, hv.sum(axis=1) / 3.0
 
 
-def _decide_all(Wv, gap, gids, items, ok, lab, best, wide):
+def _decide_all(Wv, gap, gids, items, ok, lab, best, wide, beat):
     """Certified argmax per item from all candidate values at once.
 
     ``Wv`` (r, c) lower bounds of the candidates ``gids`` (c,) (increasing), ``gap`` (r,)
     the upper bound's excess (also the bound on every non-candidate).  Writes ``ok``,
-    ``lab``, ``best`` (if given) and ``wide`` (a non-candidate may win) at ``items`` (r,).
+    ``lab``, ``best`` (if given), ``wide`` (a non-candidate may win) and ``beat`` (bound on
+    every group not returned) at ``items`` (r,).
 
     Returns
     -------
@@ -1020,7 +1113,9 @@ def _decide_all(Wv, gap, gids, items, ok, lab, best, wide):
     wide[items] = gap + CERT_ABS >= top
     if best is not None:
         best[items] = top
-    pi, pj = np.nonzero(Wv + (gap + CERT_ABS)[:, None] >= top[:, None])
+    may = Wv + (gap + CERT_ABS)[:, None] >= top[:, None]
+    beat[items] = np.maximum(np.where(may, -np.inf, Wv).max(axis=1) + gap, gap)
+    pi, pj = np.nonzero(may)
     return items[pi], gids[pj]
 
 
@@ -1037,13 +1132,15 @@ def _decide(a, item, gid, lo, hi, rival):
         (item, group) pairs whose upper bound reaches the item's best lower bound.
     wide : (a,) bool
         ``rival`` reaches the best lower bound (or the item has no candidate).
+    beat : (a,) float64
+        Bound on every group not in ``win``.
     """
     ok = np.zeros(a, dtype=bool)
     lab = np.full(a, -1, dtype=np.int64)
     best = np.full(a, -np.inf)
     if len(item) == 0:
         e = np.zeros(0, dtype=np.int64)
-        return ok, lab, best, (e, e), np.ones(a, dtype=bool)
+        return ok, lab, best, (e, e), np.ones(a, dtype=bool), np.full(a, np.inf)
     o = np.lexsort((gid, -lo, item))  # per item: largest lower bound first, then lowest id
     it, g, l_, h_ = item[o], gid[o], lo[o], hi[o]
     first = np.r_[True, it[1:] != it[:-1]]
@@ -1059,7 +1156,9 @@ def _decide(a, item, gid, lo, hi, rival):
     ok &= best > np.maximum(other, rival) + CERT_ABS
     may = h_ + CERT_ABS >= best[it]
     wide = rival + CERT_ABS >= best
-    return ok, lab, best, (it[may], g[may]), wide
+    beat = np.asarray(rival, dtype=np.float64).copy()  # bound on every group not in `win`
+    np.maximum.at(beat, it[~may], h_[~may])
+    return ok, lab, best, (it[may], g[may]), wide, beat
 
 
 def _morton(P: np.ndarray, bits: int = 21) -> np.ndarray:

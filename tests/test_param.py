@@ -168,7 +168,11 @@ def test_fallback_on_non_bijective_hessian_map():
     first = res.attempts[0]
     assert first["method"] == "hessian-hlle" and not first["bijective"]
     assert first["flips"] > 0
-    assert [a["method"] for a in res.attempts][1] == "tutte"
+    # (a repair may be tried first: the cap's two coordinate eigenvalues are degenerate, so
+    # which HLLE map comes out depends on the eigen-solver; it is never kept here)
+    methods = [a["method"] for a in res.attempts]
+    assert "tutte" in methods
+    assert all(not a["kept"] for a in res.attempts if a["method"].endswith("+repair"))
     # No fallback: the flagged Hessian map is returned as is.
     raw = parameterize_chart(V, F, "hlle", fallback="none")
     assert raw.method == "hessian-hlle" and not raw.bijective and raw.flips > 0

@@ -307,6 +307,34 @@ def _intrinsic_layout(V: np.ndarray, F: np.ndarray, Nb: sp.csr_matrix) -> np.nda
     return X
 
 
+def _inv3(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverses of a batch of 3 x 3 matrices by cofactors, and their Frobenius condition
+    numbers ``|G| |G^-1|`` (``inf``/``nan`` for singular ones)."""
+    a, b, c = G[:, 0, 0], G[:, 0, 1], G[:, 0, 2]
+    d, e, f = G[:, 1, 0], G[:, 1, 1], G[:, 1, 2]
+    g, h, i = G[:, 2, 0], G[:, 2, 1], G[:, 2, 2]
+    c00, c01, c02 = e * i - f * h, f * g - d * i, d * h - e * g
+    adj = np.stack(
+        [
+            np.stack([c00, c * h - b * i, b * f - c * e], axis=1),
+            np.stack([c01, a * i - c * g, c * d - a * f], axis=1),
+            np.stack([c02, b * g - a * h, a * e - b * d], axis=1),
+        ],
+        axis=1,
+    )
+    det = a * c00 + b * c01 + c * c02
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        inv = adj / det[:, None, None]
+        cond = np.sqrt((G * G).sum(axis=(1, 2)) * (inv * inv).sum(axis=(1, 2)))
+    return inv, cond
+
+
+#: Largest (Frobenius) condition number of the 3 x 3 normal matrices for which
+#: :func:`_quadratic_rows` solves the normal equations (error ~ cond * eps relative);
+#: beyond, batched ``pinv``.
+_NORMAL_COND_MAX: float = 1e4
+
+
 def _quadratic_rows(
     u: np.ndarray, v: np.ndarray, rcond: float = 1e-15
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -314,13 +342,34 @@ def _quadratic_rows(
 
     Returns ``Hq = pinv(R Q) R`` (b, 3, k), giving ``(d, e, g)`` of
     ``f ~ a + b u + c v + d u^2/2 + e u v + g v^2/2``; ``Xp = pinv(X)`` (b, 3, k); and ``Q``.
+
+    Both pseudo-inverses are of full-column-rank (k, 3) matrices almost always: they are
+    computed from the 3 x 3 normal matrices (cofactor inverses, ``pinv(A) = (A^T A)^-1 A^T``),
+    3-5x faster than batched SVDs (measured: 5000 neighbourhoods of 13 vertices, 0.066 ->
+    0.020 s; :func:`hlle_energy` over all charts of fandisk, block, rocker-arm,
+    psb_331_mech, bunny and iron: 5.3 -> 4.5 s, largest difference in ``K`` 4e-12 of its
+    largest entry).  Neighbourhoods whose normal matrices have a condition number above
+    :data:`_NORMAL_COND_MAX` (rank-deficient fits of tiny charts, points on a conic; 19 of
+    279k on those meshes) use ``np.linalg.pinv`` with ``rcond`` as before.
     """
     k = u.shape[1]
     X = np.stack([np.ones_like(u), u, v], axis=2)  # (b, k, 3)
     Q = np.stack([0.5 * u * u, u * v, 0.5 * v * v], axis=2)  # (b, k, 3)
-    Xp = np.linalg.pinv(X)  # (b, 3, k)
-    R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto the affine residual space
-    Hq = np.linalg.pinv(R @ Q, rcond=rcond) @ R  # (b, 3, k)
+    Xt = X.transpose(0, 2, 1)
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # singular: redone
+        Gi, c1 = _inv3(Xt @ X)
+        Xp = Gi @ Xt  # (b, 3, k)
+        R = np.eye(k)[None] - X @ Xp  # (b, k, k) projector onto the affine residual space
+        RQ = R @ Q
+        RQt = RQ.transpose(0, 2, 1)
+        G2i, c2 = _inv3(RQt @ RQ)
+        Hq = (G2i @ RQt) @ R  # (b, 3, k)
+    bad = ~((c1 <= _NORMAL_COND_MAX) & (c2 <= _NORMAL_COND_MAX))  # nan/inf included
+    if bad.any():
+        Xb = X[bad]
+        Xp[bad] = np.linalg.pinv(Xb)
+        Rb = np.eye(k)[None] - Xb @ Xp[bad]
+        Hq[bad] = np.linalg.pinv(Rb @ Q[bad], rcond=rcond) @ Rb
     return Hq, Xp, Q
 
 

@@ -269,8 +269,12 @@ def run_pipeline(
     m = F.shape[0]
     areas = face_areas(V, F)
 
-    # 1. charts: face-connected pieces of each segment
+    # 1. charts: face-connected pieces of each segment.  Their topology is needed before
+    # cutting only to place user cut paths or to skip non-disks (cut="none"); otherwise it is
+    # cut_to_disk's topology_before (the same ChartTopology, checked on 179 charts of 8
+    # meshes), which saves a second edge topology per chart (0.2 s on iron.ply).
     t = time.perf_counter()
+    topology_first = bool(cut_paths) or cut != "auto"
     charts: list[Chart] = []
     for s in range(seg.num_segments):
         faces = np.flatnonzero(seg.labels == s)
@@ -280,13 +284,13 @@ def run_pipeline(
         for c in range(count):
             fc = faces[comp == c]
             ch = Chart(id=len(charts), segment=s, faces=fc)
-            topo = chart_topology(F[fc], name=f"chart {ch.id}")
+            topo = chart_topology(F[fc], name=f"chart {ch.id}") if topology_first else None
             ch.report = {
                 "id": ch.id,
                 "segment": s,
                 "faces": int(len(fc)),
                 "area": float(areas[fc].sum()),
-                "topology": topo.as_dict(),
+                "topology": topo.as_dict() if topo is not None else None,
             }
             charts.append(ch)
     if any(seg_count > 1 for seg_count in np.bincount([c.segment for c in charts])):
@@ -317,6 +321,11 @@ def run_pipeline(
         except (MeshError, CutError) as exc:
             # e.g. a user path that splits the chart in two: report it, keep the other charts
             error = f"cutting failed: {exc}"
+        if ch.report["topology"] is None:  # not computed in step 1
+            if res is not None:
+                ch.report["topology"] = res.topology_before.as_dict()
+            else:  # raises MeshError for a chart that is not a valid surface, as step 1 did
+                ch.report["topology"] = chart_topology(Fc, name=name).as_dict()
         secs_cut = time.perf_counter() - t
         t_cut += secs_cut
         ch.cut = res

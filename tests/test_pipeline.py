@@ -119,6 +119,18 @@ def test_can_auto(can_mesh, tmp_path):
         np.testing.assert_array_equal(TCc, ch.param.UV)
 
 
+def test_chart_topology_in_the_report_is_the_chart_s_own(can_mesh):
+    """With cut="auto" and no paths the report takes cut_to_disk's topology_before: the same
+    as chart_topology of the chart, whichever way it is computed."""
+    from igl_heatseg.cut import chart_topology
+
+    auto = run_pipeline(can_mesh, None)
+    first = run_pipeline(can_mesh, None, cut="none")  # computed before cutting
+    for a, b in zip(auto.charts, first.charts, strict=True):
+        assert a.report["topology"] == chart_topology(can_mesh.F[a.faces]).as_dict()
+        assert a.report["topology"] == b.report["topology"]
+
+
 def test_can_paper_mode_generatrix(can_mesh):
     v0, v1 = 5, NV * NU + 5  # bottom and top of the same generatrix (input ids)
     res = run_pipeline(can_mesh, None, cut="none", cut_paths=[(v0, v1)])

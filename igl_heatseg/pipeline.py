@@ -205,6 +205,7 @@ def run_pipeline(
     pictures: bool = False,
     solver: str = "fast",
     mode: str = "paper",
+    hlle_skip_curvature: float | None | Literal["default"] = "default",
 ) -> PipelineResult:
     """Segment, cut, parameterize, pack and (optionally) write a mesh.
 
@@ -244,6 +245,10 @@ def run_pipeline(
     mode : {"paper", "robust"}
         Segmentation mode (:func:`igl_heatseg.segment.segment_with_mode`); ``theta``/``eps``
         ``None`` take the mode's defaults.
+    hlle_skip_curvature : float, None or "default"
+        With ``energy="auto"``, charts whose total absolute Gaussian curvature exceeds this
+        skip HLLE (recorded in each chart's ``attempts``); ``"default"``:
+        :data:`igl_heatseg.param.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
 
     Returns
     -------
@@ -254,8 +259,12 @@ def run_pipeline(
     MeshError
         Bad parameters or cut-path vertex ids (named).
     """
+    from . import param as param_mod
     from .param import parameterize_chart
     from .segment import segment_with_mode
+
+    if isinstance(hlle_skip_curvature, str) and hlle_skip_curvature == "default":
+        hlle_skip_curvature = param_mod.HLLE_SKIP_CURVATURE
 
     if cut not in ("auto", "none"):
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
@@ -350,7 +359,14 @@ def run_pipeline(
             continue
         t = time.perf_counter()
         try:
-            p = parameterize_chart(res.V, res.F, energy, fallback=fallback, name=name)
+            p = parameterize_chart(
+                res.V,
+                res.F,
+                energy,
+                fallback=fallback,
+                hlle_skip_curvature=hlle_skip_curvature,
+                name=name,
+            )
         except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
             # One chart failing must not lose the others: report it and go on.
             t_param += time.perf_counter() - t

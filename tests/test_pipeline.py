@@ -131,6 +131,17 @@ def test_chart_topology_in_the_report_is_the_chart_s_own(can_mesh):
         assert a.report["topology"] == b.report["topology"]
 
 
+def test_hlle_skip_can_be_turned_off(can_mesh):
+    res = run_pipeline(can_mesh, None, hlle_skip_curvature=0.0)  # every chart curved
+    for ch in res.charts:
+        first = ch.report["attempts"][0]
+        assert first["method"] == "hessian-hlle"
+        if first["total_abs_curvature"] > 0:
+            assert first["skipped"] and "reason" in first
+    res = run_pipeline(can_mesh, None, hlle_skip_curvature=None)
+    assert all("skipped" not in ch.report["attempts"][0] for ch in res.charts)
+
+
 def test_can_paper_mode_generatrix(can_mesh):
     v0, v1 = 5, NV * NU + 5  # bottom and top of the same generatrix (input ids)
     res = run_pipeline(can_mesh, None, cut="none", cut_paths=[(v0, v1)])

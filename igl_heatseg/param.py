@@ -48,10 +48,8 @@ by the certificate, not here).
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import dataclasses
 import logging
-import os
 import time
 from dataclasses import dataclass, field
 from typing import Iterable, Literal, Sequence
@@ -234,75 +232,27 @@ class ChartParam:
 #: was as fast (11.0 vs 11.8 s on iron).
 BLAS_THREADS: int | None = 1
 
-_blas_controls: list | None = None
 
-
-def _openblas_controls() -> list:
-    """``(get, set)`` thread-count functions of every OpenBLAS loaded in this process.
-
-    Linux only (found through ``/proc/self/maps``, opened with ``RTLD_NOLOAD``: nothing new
-    is loaded); an empty list elsewhere or for other BLAS libraries.  Cached.
-    """
-    global _blas_controls
-    if _blas_controls is not None:
-        return _blas_controls
-    controls = []
-    try:
-        with open("/proc/self/maps") as fh:
-            paths = sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower() and "/" in ln})
-    except OSError:
-        paths = []
-    names = [
-        (f"{pre}_get_num_threads{suf}", f"{pre}_set_num_threads{suf}")
-        for pre in ("openblas", "scipy_openblas")
-        for suf in ("", "64_")
-    ]
-    for path in paths:
-        try:
-            lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_LOCAL)
-        except OSError:
-            continue
-        for get_name, set_name in names:
-            get = getattr(lib, get_name, None)
-            put = getattr(lib, set_name, None)
-            if get is not None and put is not None:
-                get.restype = ctypes.c_int
-                get.argtypes = []
-                put.restype = None
-                put.argtypes = [ctypes.c_int]
-                controls.append((get, put))
-                break
-    _blas_controls = controls
-    return controls
-
-
-@contextlib.contextmanager
 def limit_blas_threads(threads: int | None = BLAS_THREADS):
-    """Context manager: at most ``threads`` OpenBLAS threads inside, restored on exit.
+    """Context manager: at most ``threads`` BLAS threads inside, restored on exit.
 
     Parameters
     ----------
     threads : int or None
-        Thread count (``None`` or no OpenBLAS found: does nothing).  Applies to every
-        OpenBLAS loaded in the process (numpy's and scipy's), process-wide.
+        Thread count for every BLAS library loaded in the process (numpy's and scipy's
+        OpenBLAS, MKL, BLIS; through ``threadpoolctl``), process-wide.  ``None`` leaves them
+        as they are.
 
     Examples
     --------
     >>> with limit_blas_threads(1):
     ...     pass
     """
-    controls = _openblas_controls() if threads is not None else []
-    old = []
-    try:
-        for get, put in controls:
-            n = int(get())
-            old.append((put, n))
-            if n > threads:
-                put(int(threads))
-        yield
-    finally:
-        for put, n in old:
-            put(n)
+    if threads is None:
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=int(threads), user_api="blas")
 
 
 # --------------------------------------------------------------------------- input

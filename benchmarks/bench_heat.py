@@ -65,9 +65,22 @@ def _segment(mesh, solver: str):
         S.HeatSolver = saved
 
 
+def _cholmod(A):
+    """CHOLMOD (cholespy) factorization of the SPD CSR matrix ``A`` (indices sorted here)."""
+    import cholespy
+
+    A.sort_indices()
+    return cholespy.CholeskySolverD(
+        A.shape[0],
+        A.indptr.astype(np.int32),
+        A.indices.astype(np.int32),
+        np.ascontiguousarray(A.data),
+        cholespy.MatrixType.CSR,
+    )
+
+
 def floor_time(mesh) -> dict:
     """Seconds for cotmatrix + one CHOLMOD factorization of -L_ff + one solve."""
-    import cholespy
     import igl
     import scipy.sparse as sp
 
@@ -82,14 +95,7 @@ def floor_time(mesh) -> dict:
     t1 = time.perf_counter()
     Lr = sp.csr_matrix(L)[free]
     A = sp.csr_matrix(-Lr[:, free])
-    A.sort_indices()
-    solver = cholespy.CholeskySolverD(
-        A.shape[0],
-        A.indptr.astype(np.int32),
-        A.indices.astype(np.int32),
-        np.ascontiguousarray(A.data),
-        cholespy.MatrixType.CSR,
-    )
+    solver = _cholmod(A)
     t2 = time.perf_counter()
     b = np.ascontiguousarray(Lr[:, known] @ (group[known] == 0).astype(np.float64))
     x = np.empty_like(b)
@@ -112,7 +118,6 @@ def floor_full_time(mesh) -> dict:
     timed) makes it definite with the same sparsity.  All ``n`` vertices are unknowns, so
     this costs more than :func:`floor_time`, which factors only the free block.
     """
-    import cholespy
     import igl
     import scipy.sparse as sp
 
@@ -121,14 +126,7 @@ def floor_full_time(mesh) -> dict:
     L = igl.cotmatrix(mesh.V, mesh.F)
     t1 = time.perf_counter()
     A = sp.csr_matrix(-L + 1e-8 * M)
-    A.sort_indices()
-    solver = cholespy.CholeskySolverD(
-        A.shape[0],
-        A.indptr.astype(np.int32),
-        A.indices.astype(np.int32),
-        np.ascontiguousarray(A.data),
-        cholespy.MatrixType.CSR,
-    )
+    solver = _cholmod(A)
     t2 = time.perf_counter()
     b = np.ones(A.shape[0])
     x = np.empty_like(b)

@@ -348,9 +348,9 @@ def test_headless_render_of_every_segmentation_stage(tmp_path):
     assert not np.allclose(imgs["seeds"], imgs["initial"], atol=0.05)
 
 
-@needs_egl
-def test_headless_render_of_chart_stages(tmp_path):
-    size = (320, 240)
+def _render_box_run(tmp_path: Path, size, stages) -> None:
+    """``run_pipeline`` on the box, then ``write_run_pictures`` and ``render_scene`` for each
+    of ``stages`` (written as ``STAGE.png``), in a headless subprocess."""
     V, F = box_mesh()
     np.save(tmp_path / "V.npy", V)
     np.save(tmp_path / "F.npy", F)
@@ -363,12 +363,19 @@ def test_headless_render_of_chart_stages(tmp_path):
         mesh = validate_mesh(np.load("V.npy"), np.load("F.npy"))
         res = run_pipeline(mesh, None)
         out = viz.write_run_pictures(".", mesh, res.segmentation, res.charts, size={size})
-        viz.render_scene(mesh.V, mesh.F, res.segmentation, "charts.png", "charts",
-                         charts=res.charts, size={size})
+        for stage in {list(stages)!r}:
+            viz.render_scene(mesh.V, mesh.F, res.segmentation, stage + ".png", stage,
+                             charts=res.charts, size={size})
         print(json.dumps(sorted(out)))
         """,
         tmp_path,
     )
+
+
+@needs_egl
+def test_headless_render_of_chart_stages(tmp_path):
+    size = (320, 240)
+    _render_box_run(tmp_path, size, ["charts"])
     for name in ("segmentation", "checker", "charts"):
         _check_picture(tmp_path / f"{name}.png", size)
 
@@ -378,25 +385,7 @@ def test_run_pictures_equal_the_single_stage_renders(tmp_path):
     """write_run_pictures draws both pictures from one scene: pixel for pixel what
     render_scene draws for the "final" and "checker" stages."""
     size = (320, 240)
-    V, F = box_mesh()
-    np.save(tmp_path / "V.npy", V)
-    np.save(tmp_path / "F.npy", F)
-    _render_subprocess(
-        f"""
-        import json
-        import numpy as np
-        from igl_heatseg import validate_mesh, viz
-        from igl_heatseg.pipeline import run_pipeline
-        mesh = validate_mesh(np.load("V.npy"), np.load("F.npy"))
-        res = run_pipeline(mesh, None)
-        out = viz.write_run_pictures(".", mesh, res.segmentation, res.charts, size={size})
-        for stage in ("final", "checker"):
-            viz.render_scene(mesh.V, mesh.F, res.segmentation, stage + ".png", stage,
-                             charts=res.charts, size={size})
-        print(json.dumps(sorted(out)))
-        """,
-        tmp_path,
-    )
+    _render_box_run(tmp_path, size, ["final", "checker"])
     import matplotlib.image as mpimg
 
     for run, single in (("segmentation", "final"), ("checker", "checker")):

@@ -464,8 +464,10 @@ class FastHeatSolver:
                 U = np.empty((n, g1 - g0))
                 U[free] = X
                 U[known] = (group[known][:, None] == gs[None, :]).astype(np.float64)
-                corner = [U[Fs[:, 0]], U[Fs[:, 1]], U[Fs[:, 2]]]
-                Uf = (corner[0] + corner[1] + corner[2]) / 3.0
+                Uf = U[Fs[:, 0]]  # in place: 2x faster, same rounding as (a + b + c) / 3
+                Uf += U[Fs[:, 1]]
+                Uf += U[Fs[:, 2]]
+                Uf /= 3.0
                 best = fmax_h[sel]
                 arg = farg_h[sel]
                 _argmax_update(Uf, g0, best, arg)

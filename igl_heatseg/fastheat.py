@@ -701,6 +701,7 @@ class FastHeatSolver:
             patch // _REFINE_SPLIT,
             np.maximum(np.where(cand_v, -np.inf, vval[uv]).max(axis=1), vexc[uv]) + slack_v[uv],
             np.maximum(np.where(cand_f, -np.inf, fval[uf]).max(axis=1), fexc[uf]) + slack_f[uf],
+            progress=None if progress is None else (lambda f: progress(0.9 + 0.06 * f)),
         )
         st["refined_groups"] = len(np.union1d(vid[uv][pv_i, pv_j], fid[uf][pf_i, pf_j]))
         ok_v, lab_v, max_v, ok_f, lab_f = r.ok_v, r.lab_v, r.max_v, r.ok_f, r.lab_f
@@ -733,6 +734,9 @@ class FastHeatSolver:
                 beat_v[lv],
                 beat_f[lf],
                 halo=depth * self.refine_halo,
+                progress=None
+                if progress is None
+                else (lambda f, d=depth: progress(0.96 + 0.01 * (d - 2 + f))),
             )
             ok_v[lv], lab_v[lv], max_v[lv], wide_v[lv], beat_v[lv] = (
                 r.ok_v,
@@ -824,7 +828,21 @@ class FastHeatSolver:
         )
 
     def _refine(
-        self, uv, gv, iv, open_v, uf, gf, jf, open_f, fc, split, rival_v, rival_f, halo=None
+        self,
+        uv,
+        gv,
+        iv,
+        open_v,
+        uf,
+        gf,
+        jf,
+        open_f,
+        fc,
+        split,
+        rival_v,
+        rival_f,
+        halo=None,
+        progress=None,
     ):
         """Re-solve candidate groups on large domains around uncertified vertices and faces.
 
@@ -848,6 +866,8 @@ class FastHeatSolver:
             Bound on every non-candidate (used for items that are not open).
         halo : int, optional
             Hops of the domains (default ``refine_halo``).
+        progress : callable, optional
+            Called with the fraction of clusters done.
 
         Notes
         -----
@@ -926,6 +946,8 @@ class FastHeatSolver:
             pair_cl_v, pair_cl_f = cl_v[iv], cl_f[jf]
             loc = np.full(nf, -1, dtype=np.int64)
             for ci in range(ncl):
+                if progress is not None:
+                    progress(ci / ncl)
                 D = X.indices[X.indptr[ci] : X.indptr[ci + 1]]
                 sv = np.flatnonzero(pair_cl_v == ci)
                 sf = np.flatnonzero(pair_cl_f == ci)

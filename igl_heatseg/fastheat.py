@@ -507,22 +507,13 @@ class FastHeatSolver:
         owner = np.asarray(pair.argmax(axis=1)).ravel()
         owner[np.diff(pair.indptr) == 0] = -1  # group with no free neighbour
         # 2. Domains: (nf, npatch) pattern grown by `halo` hops through free vertices.
-        X = sp.csr_matrix(
-            (
-                np.ones(nf + Bc.nnz, dtype=np.int8),
-                (np.r_[np.arange(nf), Bc.row], np.r_[patch, owner[Bc.col]]),
-            ),
-            shape=(nf, npatch),
+        X = _grow(
+            _pattern(A),
+            np.r_[np.arange(nf), Bc.row],
+            np.r_[patch, owner[Bc.col]],
+            (nf, npatch),
+            self.halo,
         )
-        X.sum_duplicates()
-        X.data[:] = 1
-        P = sp.csr_matrix(A, dtype=np.int8, copy=True)
-        P.data[:] = 1
-        for _ in range(self.halo):
-            X = X + P @ X
-            X.data[:] = 1
-        X = X.tocsc()
-        X.sort_indices()
         st["patches"] = npatch
         st["domain_vertices"] = int(X.nnz)
         st["setup_s"] = time.perf_counter() - t
@@ -917,8 +908,7 @@ class FastHeatSolver:
         act_f = open_f.copy()
         act_f[jf] = True
         av, af = np.flatnonzero(act_v), np.flatnonzero(act_f)
-        P = sp.csr_matrix(A, dtype=np.int8, copy=True)
-        P.data[:] = 1
+        P = _pattern(A)
         ncl, cl = _clusters(P, np.r_[uv[av], fcor[af].max(axis=1)], max(halo // 3, 1), split)
         cl_v = np.full(a, -1, dtype=np.int64)
         cl_v[av] = cl[: len(av)]
@@ -930,17 +920,7 @@ class FastHeatSolver:
             src_r = np.r_[uv[av], fcor[af].ravel(), Bc.row]
             src_c = np.r_[cl_v[av], np.repeat(cl_f[af], 3), np.r_[cl_v[iv], cl_f[jf]][Bc.col]]
             keep = src_r >= 0
-            X = sp.csr_matrix(
-                (np.ones(int(keep.sum()), dtype=np.int8), (src_r[keep], src_c[keep])),
-                shape=(nf, ncl),
-            )
-            X.sum_duplicates()
-            X.data[:] = 1
-            for _ in range(halo):
-                X = X + P @ X
-                X.data[:] = 1
-            X = X.tocsc()
-            X.sort_indices()
+            X = _grow(P, src_r[keep], src_c[keep], (nf, ncl), halo)
             Arow = A @ np.ones(nf)
             Br = B.tocsr()
             pair_cl_v, pair_cl_f = cl_v[iv], cl_f[jf]
@@ -1055,6 +1035,33 @@ def _local_params(r: float) -> tuple[int, int]:
     return halo, patch
 
 
+def _pattern(A: sp.spmatrix) -> sp.csr_matrix:
+    """Adjacency pattern of ``A`` (diagonal included) as int32 ones.
+
+    int32, not int8: a hop sums a row's neighbours, and a vertex of valence 127 or more
+    would overflow int8, wrap to zero and drop out of the grown set.
+    """
+    P = sp.csr_matrix(A, dtype=np.int32, copy=True)
+    P.data[:] = 1
+    return P
+
+
+def _grow(
+    P: sp.csr_matrix, rows: np.ndarray, cols: np.ndarray, shape: tuple, hops: int
+) -> sp.csc_matrix:
+    """Column sets grown ``hops`` edge hops: ``(rows, cols)`` marks vertex ``rows[i]`` in set
+    ``cols[i]``; returns the (N, sets) 0/1 pattern, CSC with sorted indices."""
+    X = sp.csr_matrix((np.ones(len(rows), dtype=np.int32), (rows, cols)), shape=shape)
+    X.sum_duplicates()
+    X.data[:] = 1
+    for _ in range(hops):
+        X = X + P @ X
+        X.data[:] = 1
+    X = X.tocsc()
+    X.sort_indices()
+    return X
+
+
 def _clusters(
     P: sp.csr_matrix, item: np.ndarray, hops: int, split: np.ndarray
 ) -> tuple[int, np.ndarray]:
@@ -1080,10 +1087,10 @@ def _clusters(
     """
     if len(item) == 0:
         return 0, np.zeros(0, dtype=np.int64)
-    mark = np.zeros(P.shape[0], dtype=np.int8)
+    mark = np.zeros(P.shape[0], dtype=np.int32)
     mark[item] = 1
     for _ in range(hops):
-        mark = np.minimum(mark + P @ mark, 1).astype(np.int8)
+        mark = np.minimum(mark + P @ mark, 1)
     sub = np.flatnonzero(mark)
     _, comp = connected_components(P[sub][:, sub], directed=False)
     pos = np.full(P.shape[0], -1, dtype=np.int64)

@@ -3,7 +3,7 @@
 import igl
 import numpy as np
 import pytest
-from meshes import cube, cylinder, grid, sphere
+from meshes import cube, cylinder, disk, grid, sphere
 
 from igl_heatseg.fastheat import FastHeatSolver, _merge_topk, _seed_face_labels, _topk_rows
 from igl_heatseg.heat import HeatSolver
@@ -241,3 +241,25 @@ def test_sparse_seeds_deeper_refinement_matches_exact(seed):
     solver, _, _ = _compare(V, F, group, **LOCAL)
     assert solver.stats["open_items"] > 0
     assert solver.stats.get("refine_pass2_items", 0) > 0
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_high_valence_vertex_stays_in_its_domains(seed):
+    """A vertex of valence 254 (disk centre): domain growth once summed neighbours in int8,
+    wrapped to zero and dropped the vertex from its refinement domain (found in review)."""
+
+    na, nr = 254, 4
+    V, F = disk(na, nr)
+    rng = np.random.default_rng(seed)
+    group = -np.ones(len(V), dtype=np.int64)
+    k = 0
+    for r in (2, nr):  # runs of seeds on rings 2 and 4
+        ring = 1 + (r - 1) * na + np.arange(na)
+        cuts = np.sort(rng.choice(na, 6, replace=False))
+        for a, b in zip(cuts, np.r_[cuts[1:], cuts[0] + na], strict=True):
+            idx = ring[np.arange(a, b) % na]
+            group[idx[rng.random(len(idx)) < 0.5]] = k
+            k += 1
+    _, inv = np.unique(group[group >= 0], return_inverse=True)
+    group[group >= 0] = inv
+    _compare(V, F, group, **LOCAL)

@@ -9,6 +9,7 @@ __all__ = [
     "EPS_DEFAULT",
     "DEGENERATE_FACE_TOL",
     "HEAT_SUM_TOL",
+    "TIE_RTOL",
     "OFF_HEADER_MAX_BYTES_PER_ENTRY",
 ]
 
@@ -25,6 +26,11 @@ DEGENERATE_FACE_TOL: float = 1e-12
 
 #: Largest allowed deviation of ``sum_i u_i`` from 1 before a heat solve is reported as failed.
 HEAT_SUM_TOL: float = 1e-6
+
+#: Two temperatures within this relative distance are a tie, decided for the lower group id.
+#: Two factorizations of one system (libigl's LLT, CHOLMOD) round differently (measured: an
+#: exact tie came out 5.6e-17 apart), and an exact tie must not be decided by round-off.
+TIE_RTOL: float = 1e-12
 
 #: Smallest number of bytes an ASCII OFF file needs per declared vertex or face; a header that
 #: declares more entries than ``file_size / this`` cannot be held by the file.

@@ -36,17 +36,22 @@ argmax as ``HeatSolver`` does.
    that domain's outer boundary (one more right-hand side), ``w <= u <= w + h`` under the
    same M-matrix condition, and ``h`` is tiny that deep.  Where a group outside the kept
    top-K may win ("open" items), every group with a seed next to the domain is tried; all
-   others sum to at most ``h`` there.
-5. Whatever is still uncertified is recomputed exactly: its candidate groups are solved on
-   the whole mesh with one global factorization, and the argmax is taken from exact values.
+   others sum to at most ``h`` there.  What is left gets up to :data:`REFINE_PASSES` deeper
+   passes (2x, 3x the halo): only the few groups whose bounds still reach the best are
+   re-solved, or, where a group not tried may win, every group seeded next to the domain.
+5. Whatever is still uncertified is recomputed exactly: the groups that may still win there
+   (all groups, if one that no pass tried may) are solved on the whole mesh with one global
+   factorization, and the argmax is taken from exact values.
 
 Real scans have a few negative cotangent weights (obtuse triangle pairs; iron.ply: 1.2 % of
 its edges), where the maximum principle and so the bound of step 3 may fail; fields there even
 go negative (down to -0.63 on iron.ply).  The certificate therefore demands a margin of
 ``CERT_FACTOR * |d| + CERT_ABS`` instead of ``d``; agreement with the exact solver on real
 scans is measured by ``benchmarks/bench_heat.py`` and tested in ``tests/test_fastheat.py``.
-On meshes with non-negative weights the labels are those of the exact solve (ties aside:
-an exact tie is never certified and is decided by the exact fallback, lowest id first).
+On meshes with non-negative weights the labels are those of the exact solve.  An exact tie
+is never certified; the fallback decides it for the lowest id, as the exact solver does
+(values within :data:`~igl_heatseg.constants.TIE_RTOL` count as tied, since two
+factorizations round differently).
 
 Memory stays bounded: dense work arrays are ``|D_c| x (groups owned by c)`` per patch, plus
 ``TOPK`` candidates per vertex and per face.
@@ -120,7 +125,7 @@ LOCAL_MAX_FREE_PER_GROUP: float = 300.0
 #: uncertified (then refined or solved exactly), never change it.
 SKIP_BELOW: float = 0.02
 
-#: Candidates (lower bounds) kept per vertex and per face.
+#: Candidates (lower bounds) kept per vertex and per face (at least 2).
 TOPK: int = 4
 
 #: A label is certified when its margin over every rival exceeds
@@ -264,7 +269,8 @@ class FastHeatSolver:
         ``float("inf")`` forces exact solves, ``0`` local ones.
     refine_halo : int, optional
         Hops of the refinement domains (default: the larger of :data:`REFINE_HOPS` and the
-        halo); what they leave uncertified is solved exactly on the whole mesh.
+        halo; ``0``: domains of the items and seeds alone, and no deeper passes); what they
+        leave uncertified is solved exactly on the whole mesh.
 
     Attributes
     ----------
@@ -274,7 +280,8 @@ class FastHeatSolver:
         Filled by :meth:`labels`: ``mode`` (``"exact"`` or ``"local"``), ``patches``,
         ``domain_vertices`` (sum of domain sizes), ``uncertified_vertices`` and
         ``uncertified_faces`` (after the patch solves), ``open_items`` (of those, where a
-        group outside the top-K may win), ``refined_groups``, ``refine_pass2_items`` ...
+        group outside the top-K may win), ``refined_groups`` (groups of the first refinement
+        pass's candidate pairs, open items' groups not counted), ``refine_pass2_items`` ...
         (items left to the deeper refinement passes), ``exact_vertices``, ``exact_faces``
         (left to the exact fallback), ``exact_wide`` (of those, where any nearby group may
         win), ``fallback_groups`` (groups solved exactly), and timings (``*_s``).
@@ -493,7 +500,7 @@ class FastHeatSolver:
         m = F.shape[0]
         group, free, fidx = self.group, self.free, self._fidx
         A, B = self._A, self._B
-        K = TOPK
+        K = max(int(TOPK), 2)  # the certificate compares the best with the second
 
         t = time.perf_counter()
         # 1. Patches: runs of patch_size free vertices in Morton order.
@@ -666,7 +673,6 @@ class FastHeatSolver:
         st["uncertified_faces"] = len(uf)
         cand_v = (vval[uv] + slack_v[uv, None] >= vval[uv, :1]) & (vid[uv] >= 0)
         cand_f = (fval[uf] + slack_f[uf, None] >= fval[uf, :1]) & (fid[uf] >= 0)
-        cands = np.union1d(vid[uv][cand_v], fid[uf][cand_f])
         # If a rival outside the kept candidates may win, every group is a candidate there.
         open_v = vexc[uv] + slack_v[uv] >= vval[uv, 0]
         open_f = fexc[uf] + slack_f[uf] >= fval[uf, 0]
@@ -698,28 +704,30 @@ class FastHeatSolver:
         ok_v, lab_v, max_v, ok_f, lab_f = r.ok_v, r.lab_v, r.max_v, r.ok_f, r.lab_f
         win_v, win_f, wide_v, wide_f = r.win_v, r.win_f, r.wide_v, r.wide_f
         beat_v, beat_f = r.beat_v, r.beat_f
-        # Deeper passes for items whose few possible winners are too close to call: only
-        # those winners are re-solved; every other group stays below `beat`.
+        # Deeper passes (2x, 3x the halo) for what is left.  Where a few possible winners
+        # are too close to call, only they are re-solved (every other group stays below
+        # `beat`); where a group not tried may win ("wide"), every group seeded next to the
+        # larger domain is tried.
         for depth in range(2, 2 + REFINE_PASSES):
-            lv = np.flatnonzero(~ok_v & ~wide_v)
-            lf = np.flatnonzero(~ok_f & ~wide_f)
+            lv = np.flatnonzero(~ok_v)
+            lf = np.flatnonzero(~ok_f)
             if self.refine_halo == 0 or not (len(lv) or len(lf)):
                 break
             mv = np.full(len(uv), -1, dtype=np.int64)
             mv[lv] = np.arange(len(lv))
             mf = np.full(len(uf), -1, dtype=np.int64)
             mf[lf] = np.arange(len(lf))
-            kv = mv[win_v[0]] >= 0
-            kf = mf[win_f[0]] >= 0
+            kv = (mv[win_v[0]] >= 0) & ~wide_v[win_v[0]]
+            kf = (mf[win_f[0]] >= 0) & ~wide_f[win_f[0]]
             r = self._refine(
                 uv[lv],
                 win_v[1][kv],
                 mv[win_v[0][kv]],
-                np.zeros(len(lv), dtype=bool),
+                wide_v[lv],
                 uf[lf],
                 win_f[1][kf],
                 mf[win_f[0][kf]],
-                np.zeros(len(lf), dtype=bool),
+                wide_f[lf],
                 fc,
                 patch // _REFINE_SPLIT,
                 beat_v[lv],
@@ -737,33 +745,29 @@ class FastHeatSolver:
                 r.beat_v,
             )
             ok_f[lf], lab_f[lf], wide_f[lf], beat_f[lf] = r.ok_f, r.lab_f, r.wide_f, r.beat_f
-            # keep the earlier pairs of the items decided or still open; new pairs for the rest
-            win_v = (
-                np.r_[win_v[0][~kv], lv[r.win_v[0]]],
-                np.r_[win_v[1][~kv], r.win_v[1]],
-            )
-            win_f = (
-                np.r_[win_f[0][~kf], lf[r.win_f[0]]],
-                np.r_[win_f[1][~kf], r.win_f[1]],
-            )
+            # the items of this pass get its pairs; the others keep theirs
+            ov = mv[win_v[0]] < 0
+            of = mf[win_f[0]] < 0
+            win_v = (np.r_[win_v[0][ov], lv[r.win_v[0]]], np.r_[win_v[1][ov], r.win_v[1]])
+            win_f = (np.r_[win_f[0][of], lf[r.win_f[0]]], np.r_[win_f[1][of], r.win_f[1]])
             st[f"refine_pass{depth}_items"] = len(lv) + len(lf)
         vertex_labels[free[uv[ok_v]]] = lab_v[ok_v]
         vertex_max[free[uv[ok_v]]] = max_v[ok_v]
         face_labels[uf[ok_f]] = lab_f[ok_f]
         st["refine_s"] = time.perf_counter() - t
         # The exact fallback solves the groups that may still win where refinement did not
-        # decide (by its bounds), and, where a group it did not try may win, all groups near.
+        # decide (by its bounds); where a group that no pass tried may still win, all groups.
         cands = np.union1d(win_v[1][~ok_v[win_v[0]]], win_f[1][~ok_f[win_f[0]]])
         wv, wf = ~ok_v & wide_v, ~ok_f & wide_f
         st["exact_wide"] = int(wv.sum() + wf.sum())
         if wv.any() or wf.any():
-            lost = (vid[uv[wv], 0] < 0).any() or (fid[uf[wf], 0] < 0).any()
-            if lost:  # some vertex or face lies in no domain: anything may win there
-                log.warning("vertices or faces outside every patch domain: solving all groups")
-                more = np.arange(k)
-            else:
-                more = self._groups_near(X, owned, bounds, uv[wv], uf[wf], fc)
-            cands = np.union1d(cands, more)
+            log.warning(
+                "%d vertices/faces may be won by a group that no refinement pass tried: "
+                "solving all %d groups exactly",
+                int(wv.sum() + wf.sum()),
+                k,
+            )
+            cands = np.arange(k)
         uv, uf = uv[~ok_v], uf[~ok_f]
         st["exact_vertices"] = len(uv)
         st["exact_faces"] = len(uf)
@@ -802,7 +806,7 @@ class FastHeatSolver:
             progress(1.0)
         log.info(
             "local heat labels: %d patches, %d domain vertices, %d/%d vertices and %d/%d faces "
-            "uncertified, %d groups solved exactly",
+            "left to the exact fallback, %d groups solved exactly",
             npatch,
             X.nnz,
             len(uv),
@@ -902,7 +906,7 @@ class FastHeatSolver:
         beat_f = np.full(b, np.inf)
         win_v, win_f = [], []  # (item, group) pairs that may still win
         fcor = fc[uf]  # (b, 3) free corners of the face items, -1 at seeds
-        # Items to refine, one vertex each (a face: its first free corner).
+        # Items to refine, one vertex each (a face: a free corner, the largest free index).
         act_v = open_v.copy()
         act_v[iv] = True
         act_f = open_f.copy()
@@ -937,6 +941,10 @@ class FastHeatSolver:
                 BDr = Br[D]
                 if len(ov) or len(of):  # every group with a seed next to D
                     gids = np.union1d(gids, np.unique(BDr.indices))
+                    # and the groups of the open faces' seed corners (their weight to D
+                    # may be exactly zero, so B need not list them)
+                    sg = group[F[uf[of]]].ravel()
+                    gids = np.union1d(gids, sg[sg >= 0])
                 ADD = A[D][:, D]
                 bh = -(Arow[D] - ADD @ np.ones(len(D)))  # L_D,out 1 (>= 0 for cot weights)
                 rhs = np.c_[BDr[:, gids].toarray(), bh]
@@ -997,23 +1005,6 @@ class FastHeatSolver:
         return _Refined(
             ok_v, lab_v, max_v, ok_f, lab_f, win_v, win_f, wide_v, wide_f, beat_v, beat_f
         )
-
-    def _groups_near(self, X, owned, bounds, fv, ff, fc) -> np.ndarray:
-        """Groups owned by patches whose domain holds the given free vertices / face corners."""
-        verts = np.unique(np.r_[fv, fc[ff].ravel()])
-        verts = verts[verts >= 0]
-        Xr = X.tocsr()
-        patches = np.unique(Xr[verts].indices)
-        out = [owned[bounds[c] : bounds[c + 1]] for c in patches]
-        res = np.unique(np.concatenate(out)) if out else np.zeros(0, dtype=np.int64)
-        log.warning(
-            "%d vertices/faces have rivals outside their %d kept candidates; solving %d groups "
-            "exactly",
-            len(fv) + len(ff),
-            TOPK,
-            len(res),
-        )
-        return res
 
 
 # ------------------------------------------------------------------------------------------
@@ -1280,11 +1271,11 @@ def _seed_face_labels(Gc: np.ndarray) -> np.ndarray:
 
 
 def _argmax_update_ids(U: np.ndarray, gids: np.ndarray, best: np.ndarray, arg: np.ndarray) -> None:
-    """Running argmax over columns with increasing group ids ``gids``; lower ids win ties."""
+    """Running argmax over columns with increasing group ids ``gids``; lower ids win ties
+    (within :data:`~igl_heatseg.constants.TIE_RTOL`, as :func:`heat._argmax_update`)."""
     if U.shape[0] == 0:
         return
-    j = U.argmax(axis=1)
-    val = U[np.arange(U.shape[0]), j]
-    upd = val > best
-    best[upd] = val[upd]
-    arg[upd] = gids[j[upd]]
+    pos = np.full(len(best), -1, dtype=np.int64)  # column that improved each row, or -1
+    _argmax_update(U, 0, best, pos)
+    upd = pos >= 0
+    arg[upd] = gids[pos[upd]]

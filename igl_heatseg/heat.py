@@ -20,7 +20,7 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
-from .constants import HEAT_SUM_TOL
+from .constants import HEAT_SUM_TOL, TIE_RTOL
 from .topology import vertex_components
 
 __all__ = ["HeatSolver", "HeatLabels", "heat_fields"]
@@ -200,10 +200,17 @@ def require_seeded_components(n: int, F: np.ndarray, known: np.ndarray) -> None:
 
 
 def _argmax_update(U: np.ndarray, offset: int, best: np.ndarray, arg: np.ndarray) -> None:
-    """Fold a batch of columns into a running argmax; earlier (lower) ids win ties."""
-    j = U.argmax(axis=1)
+    """Fold a batch of columns into a running argmax; earlier (lower) ids win ties.
+
+    Values within :data:`~igl_heatseg.constants.TIE_RTOL` (relative) of the largest count
+    as tied, so that the lowest id wins an exact tie whatever the round-off of the solve.
+    """
+    if U.shape[0] == 0 or U.shape[1] == 0:
+        return
+    top = U.max(axis=1)
+    j = (U >= (top - TIE_RTOL * np.abs(top))[:, None]).argmax(axis=1)  # first near-maximum
     val = U[np.arange(U.shape[0]), j]
-    upd = val > best
+    upd = val > best + TIE_RTOL * np.abs(np.where(np.isfinite(best), best, 0.0))
     best[upd] = val[upd]
     arg[upd] = j[upd] + offset
 

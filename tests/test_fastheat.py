@@ -263,3 +263,18 @@ def test_high_valence_vertex_stays_in_its_domains(seed):
     _, inv = np.unique(group[group >= 0], return_inverse=True)
     group[group >= 0] = inv
     _compare(V, F, group, **LOCAL)
+
+
+def test_exact_ties_in_the_fallback_go_to_the_lowest_group(monkeypatch):
+    """A symmetric grid has exactly tied fields; the fallback's factorization (CHOLMOD or a
+    different libigl one) rounds them apart by ~1e-16.  Ties must still go to the lowest id,
+    as in the exact solver (case found by a random search in review)."""
+    import igl_heatseg.fastheat as fh
+
+    V, F = grid(36, 36)
+    rng = np.random.default_rng(131)
+    rng.integers(4)
+    k, group = seed_groups(F, rng.random(len(V)) < rng.choice([0.05, 0.1, 0.2, 0.3, 0.4]))
+    monkeypatch.setattr(fh, "TOPK", 3)
+    solver, _, _ = _compare(V, F, group, exact_work=0, patch_size=60, halo=1, refine_halo=2)
+    assert solver.stats["fallback_groups"] > 0

@@ -666,7 +666,7 @@ class FastHeatSolver:
         if len(allseed):
             face_labels[allseed] = _seed_face_labels(group[F[allseed]])
 
-        # 4. Exact fallback for the uncertified.
+        # Uncertified items, their candidates, and the open ones.
         uv = np.flatnonzero(unc_v)
         uf = np.flatnonzero(unc_f)
         st["uncertified_vertices"] = len(uv)

@@ -342,6 +342,7 @@ class FastHeatSolver:
         )
         self._B = sp.csc_matrix(Lf[:, self.known] @ G)
         self._factor: _Factor | None = None
+        self._P: sp.csr_matrix | None = None  # adjacency pattern of A_ff (see _adjacency)
         self.stats: dict = {}
 
     # -- exact fields ----------------------------------------------------------------------
@@ -358,6 +359,12 @@ class FastHeatSolver:
                 ) from exc
             self.stats["global_factor_s"] = time.perf_counter() - t
         return self._factor
+
+    def _adjacency(self) -> sp.csr_matrix:
+        """Adjacency pattern of the free vertices (:func:`_pattern` of ``A_ff``), built once."""
+        if self._P is None:
+            self._P = _pattern(self._A)
+        return self._P
 
     def _free_fields(self, groups: np.ndarray, nrhs: int = 1) -> np.ndarray:
         """Exact fields of ``groups`` on the free vertices, shape (nf, len(groups)).
@@ -515,7 +522,7 @@ class FastHeatSolver:
         owner[np.diff(pair.indptr) == 0] = -1  # group with no free neighbour
         # 2. Domains: (nf, npatch) pattern grown by `halo` hops through free vertices.
         X = _grow(
-            _pattern(A),
+            self._adjacency(),
             np.r_[np.arange(nf), Bc.row],
             np.r_[patch, owner[Bc.col]],
             (nf, npatch),
@@ -912,7 +919,7 @@ class FastHeatSolver:
         act_f = open_f.copy()
         act_f[jf] = True
         av, af = np.flatnonzero(act_v), np.flatnonzero(act_f)
-        P = _pattern(A)
+        P = self._adjacency()
         ncl, cl = _clusters(P, np.r_[uv[av], fcor[af].max(axis=1)], max(halo // 3, 1), split)
         cl_v = np.full(a, -1, dtype=np.int64)
         cl_v[av] = cl[: len(av)]

@@ -70,7 +70,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .constants import HEAT_SUM_TOL
-from .heat import HeatLabels, _argmax_update, require_seeded_components
+from .heat import HeatLabels, _argmax_update, corner_means, require_seeded_components
 
 __all__ = [
     "FastHeatSolver",
@@ -478,10 +478,7 @@ class FastHeatSolver:
                 U = np.empty((n, g1 - g0))
                 U[free] = X
                 U[known] = (group[known][:, None] == gs[None, :]).astype(np.float64)
-                Uf = U[Fs[:, 0]]  # in place: 2x faster, same rounding as (a + b + c) / 3
-                Uf += U[Fs[:, 1]]
-                Uf += U[Fs[:, 2]]
-                Uf /= 3.0
+                Uf = corner_means(U, Fs)
                 best = fmax_h[sel]
                 arg = farg_h[sel]
                 _argmax_update(Uf, g0, best, arg)
@@ -803,7 +800,7 @@ class FastHeatSolver:
                 U[~isf] = (group[need[~isf]][:, None] == gs[None, :]).astype(np.float64)
                 _argmax_update_ids(U[pos[free[uv]]], gs, best_v, arg_v)
                 Pf = pos[fcorn]
-                Wf = (U[Pf[:, 0]] + U[Pf[:, 1]] + U[Pf[:, 2]]) / 3.0
+                Wf = corner_means(U, Pf)
                 _argmax_update_ids(Wf, gs, best_f, arg_f)
             vertex_labels[free[uv]] = arg_v
             vertex_max[free[uv]] = best_v

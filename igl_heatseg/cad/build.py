@@ -1,0 +1,423 @@
+"""From a segmented mesh with one fitted surface per segment to a sewn B-Rep.
+
+Stages (timed in :attr:`CadResult.timings`): ``topology`` (chains, loops, corners from the
+labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation check),
+``vertices`` and ``edges`` (Gauss-Newton onto the adjacent surfaces, exact lines and circles
+or B-spline curves, each edge built once and shared by its two faces), ``faces`` (trimmed
+faces, ``ShapeFix_Face`` for pcurves and seams, per-face checks; failures become faceted
+patches), ``sew`` (sewing, shape fix, same-domain unification, solid) and ``fidelity``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from igl_heatseg.errors import MeshError
+from igl_heatseg.surfaces.model import Surface
+
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
+from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
+from OCP.BRepGProp import BRepGProp  # noqa: E402
+from OCP.GProp import GProp_GProps  # noqa: E402
+from OCP.ShapeFix import ShapeFix_Face  # noqa: E402
+from OCP.TopoDS import TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
+
+from . import faceted, freeform, geometry  # noqa: E402
+from .fidelity import brep_fidelity  # noqa: E402
+from .sew import assemble  # noqa: E402
+from .topology import boundary_graph  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["CadResult", "build_brep"]
+
+#: Default modelling tolerance as a fraction of the bbox diagonal: a segment whose mesh
+#: vertices lie farther than this from its surface is not built (faceted instead).  Loose
+#: enough for scan noise, tight enough to reject a wrong surface type.
+DEFAULT_TOL_REL = 1e-2
+
+#: Edge curves (B-splines) approximate their points to this fraction of the tolerance, so
+#: curve error never dominates the fit error.
+CURVE_TOL_FRACTION = 1e-2
+
+#: Minimum number of samples along an edge before it is fitted (straight 2-vertex chains get
+#: midpoints, so that the intersection of curved surfaces is followed between mesh vertices).
+MIN_EDGE_SAMPLES = 24
+
+#: A trimmed face whose area differs from its segment's mesh area by more than this fraction
+#: was trimmed wrongly (complement chosen, loop lost) and is faceted instead.
+FACE_AREA_SLACK = 0.2
+
+#: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
+#: ~1-unit parts; we keep a margin above it).
+MIN_TOL_REL = 1e-7
+
+
+@dataclass
+class CadResult:
+    """Result of :func:`build_brep`.
+
+    Attributes
+    ----------
+    shape : TopoDS_Shape
+        A solid when the mesh was closed and the shell closed, else a shell or compound.
+    faces : list of dict
+        One per segment: ``index``, ``kind``, ``status`` (``"built"`` or ``"faceted"``),
+        ``reason`` (None when built), ``max_dev`` (largest vertex distance to the surface).
+    fidelity : dict
+        :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
+    timings : dict
+        Seconds per stage.
+    tolerances : dict
+        The modelling, curve and sewing tolerances used.
+    faceted_model : bool
+        True when the whole build failed and ``shape`` is the fully faceted mesh.
+    """
+
+    shape: object
+    faces: list = field(default_factory=list)
+    fidelity: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    tolerances: dict = field(default_factory=dict)
+    faceted_model: bool = False
+    message: str = ""
+
+    @property
+    def not_built(self) -> list:
+        """Entries of :attr:`faces` that were faceted."""
+        return [f for f in self.faces if f["status"] != "built"]
+
+    def to_report(self) -> dict:
+        """JSON-ready summary (no OCC objects)."""
+        return {
+            "faces": [dict(f) for f in self.faces],
+            "not_built": [f["index"] for f in self.not_built],
+            "fidelity": dict(self.fidelity),
+            "timings": {k: round(float(v), 4) for k, v in self.timings.items()},
+            "tolerances": dict(self.tolerances),
+            "faceted_model": bool(self.faceted_model),
+            "message": self.message,
+        }
+
+
+def _validate(V, F, labels, surfaces, uv):
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    labels = np.asarray(labels)
+    if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
+        raise MeshError(f"V must be (n, 3) float64, got shape {V.shape}")
+    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0 or not np.issubdtype(F.dtype, np.integer):
+        raise MeshError(f"F must be (m, 3) int64, got shape {F.shape} dtype {F.dtype}")
+    F = F.astype(np.int64)
+    if F.min() < 0 or F.max() >= len(V):
+        raise MeshError(f"F indexes vertices outside 0..{len(V) - 1} (V has shape {V.shape})")
+    if labels.shape != (len(F),) or not np.issubdtype(labels.dtype, np.integer):
+        raise MeshError(f"labels must be ({len(F)},) int64, got shape {labels.shape}")
+    labels = labels.astype(np.int64)
+    k = len(surfaces)
+    if labels.min() < 0 or labels.max() >= k:
+        raise MeshError(f"labels must lie in 0..{k - 1} (one per surface; {k} surfaces given), "
+                        f"found {labels.min()}..{labels.max()}")
+    if not all(isinstance(s, Surface) for s in surfaces):
+        raise MeshError("surfaces must be igl_heatseg.surfaces.model.Surface objects")
+    if uv is not None and len(uv) != k:
+        raise MeshError(f"uv must have one entry (or None) per segment: {k}, got {len(uv)}")
+    if not np.all(np.isfinite(V)):
+        raise MeshError(f"V (shape {V.shape}) has non-finite coordinates")
+    return V, F, labels
+
+
+def _segment(V, F, faces):
+    verts, Fl = np.unique(F[faces], return_inverse=True)
+    return verts, Fl.reshape(-1, 3)
+
+
+def _surface_for(a, s, V, F, faces, uv, tol):
+    """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable."""
+    verts, Fl = _segment(V, F, faces)
+    if s.is_analytic:
+        dev = float(np.abs(s.distance(V[verts])).max())
+        if dev > tol:
+            return None, None, dev, f"surface deviates {dev:.3g} from its segment (tol {tol:.3g})"
+        geom = geometry.occ_surface(s)
+        return geom, geometry.Projector(s, geom), dev, None
+    UV = None
+    if uv is not None and uv[a] is not None:
+        ids, UVg = uv[a]
+        pos = np.searchsorted(verts, np.asarray(ids))
+        UV = np.zeros((len(verts), 2))
+        UV[pos] = np.asarray(UVg, dtype=np.float64)
+    else:
+        UV = freeform.disk_chart(V[verts], Fl)
+        if UV is None:
+            return None, None, math.nan, "freeform segment is not a disk and has no chart"
+    geom, err = freeform.freeform_surface(V[verts], Fl, UV, tol)
+    if geom is None or err > tol:
+        return None, None, err, f"B-spline fit error {err:.3g} above tol {tol:.3g}"
+    return geom, geometry.Projector(None, geom), err, None
+
+
+def _vertex(builder, X, tol):
+    v = TopoDS_Vertex()
+    builder.MakeVertex(v, geometry._pnt(X), float(tol))
+    return v
+
+
+def _place_vertices(V, graph, projs, tol, ctx):
+    """B-Rep vertex positions (least-squares point of the good surfaces around each corner)."""
+    pos = {}
+    for v in graph.corners.tolist():
+        ps = [projs[s] for s in graph.vertex_sides[v] if s >= 0 and projs[s] is not None]
+        X = V[v]
+        if ps:
+            Y, res = geometry.onto_surfaces(V[v][None], ps)
+            if res[0] <= ctx["curve_tol"] and np.linalg.norm(Y[0] - V[v]) <= tol:
+                X = Y[0]
+            else:
+                logger.debug("vertex %d: surfaces ill-conditioned (res %.3g), mesh vertex", v,
+                             res[0])
+        pos[v] = X
+    return pos
+
+
+def _samples(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Polyline subdivided to at least MIN_EDGE_SAMPLES points; index of each original point."""
+    nseg = len(P) - 1
+    s = max(1, math.ceil(MIN_EDGE_SAMPLES / nseg))
+    t = np.arange(s) / s
+    Q = (P[:-1, None, :] * (1 - t)[None, :, None] + P[1:, None, :] * t[None, :, None])
+    return np.vstack([Q.reshape(-1, 3), P[-1:]]), np.arange(nseg + 1) * s
+
+
+def _edge(chain, V, pos, projs, vertices, ctx, snap):
+    """The shared TopoDS_Edge of a chain (and snapped positions of its mesh vertices)."""
+    ps = [projs[s] for s in (chain.left, chain.right) if s >= 0 and projs[s] is not None]
+    P, orig = _samples(V[chain.verts])
+    P[0], P[-1] = pos[int(chain.verts[0])], pos[int(chain.verts[-1])]
+    if ps and len(P) > 2:
+        X, res = geometry.onto_surfaces(P[1:-1], ps)
+        ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[1:-1], axis=1) <= ctx["tol"])
+        P[1:-1] = np.where(ok[:, None], X, P[1:-1])
+    snap[chain.verts] = P[orig]
+    curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
+    v0, v1 = vertices[int(chain.verts[0])], vertices[int(chain.verts[-1])]
+    builder = ctx["builder"]
+    for vid, t in ((int(chain.verts[0]), t0), (int(chain.verts[-1]), t1)):
+        q = curve.Value(t)  # the vertex tolerance covers the curve's end
+        gap = float(np.linalg.norm(pos[vid] - (q.X(), q.Y(), q.Z())))
+        if 1.5 * gap > ctx["vtols"].get(vid, ctx["vertex_tol"]):
+            ctx["vtols"][vid] = 1.5 * gap
+            builder.UpdateVertex(vertices[vid], 1.5 * gap)
+    mk = BRepBuilderAPI_MakeEdge(curve, v0, v1, t0, t1)
+    if not mk.IsDone():
+        raise RuntimeError(f"edge {chain.left}/{chain.right}: MakeEdge error {mk.Error()}")
+    return mk.Edge()
+
+
+def _face(a, geom, loops, edges, ctx, seg_area):
+    """Trimmed, fixed face of segment a, or (None, reason)."""
+    builder = ctx["builder"]
+    if not loops:
+        mk = BRepBuilderAPI_MakeFace(geom, ctx["vertex_tol"])
+        if not mk.IsDone():
+            return None, "closed segment on an unbounded surface"
+        face = mk.Face()
+    else:
+        face = TopoDS_Face()
+        builder.MakeFace(face, geom, ctx["vertex_tol"])
+        for loop in loops:
+            w = TopoDS_Wire()
+            builder.MakeWire(w)
+            for cid, fwd in loop:
+                builder.Add(w, edges[cid] if fwd else edges[cid].Reversed())
+            w.Closed(True)
+            builder.Add(face, w)
+        fix = ShapeFix_Face(face)
+        fix.SetPrecision(ctx["vertex_tol"])
+        fix.SetMaxTolerance(ctx["sew_tol"])
+        fix.Perform()
+        face = fix.Face()
+    if not BRepCheck_Analyzer(face).IsValid():
+        return None, "trimmed face is not valid (BRepCheck)"
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    area = props.Mass()
+    if not abs(area - seg_area) <= FACE_AREA_SLACK * seg_area:
+        return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
+    return face, None
+
+
+def _tolerances(V, F, surfaces, tol):
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+    mean_edge = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+    if tol is None:
+        tol = DEFAULT_TOL_REL * diag
+    elif not (np.isfinite(tol) and tol > 0):
+        raise MeshError(f"tol must be a positive number, got {tol!r}")
+    tol = max(float(tol), MIN_TOL_REL * diag)
+    curve_tol = max(CURVE_TOL_FRACTION * tol, MIN_TOL_REL * diag)
+    return {"tol": tol, "curve_tol": curve_tol, "vertex_tol": max(MIN_TOL_REL * diag, 1e-7),
+            "diag": diag, "mean_edge": mean_edge}
+
+
+def _sew_tolerance(ctx, devs) -> float:
+    """Sewing closes gaps between built faces (curve error) and faceted patches (whose
+    borders are the mesh polylines snapped onto the good neighbour's surface): a few curve
+    tolerances plus the deviation of the worst built surface, never above half an edge."""
+    dev = max([d for d in devs if np.isfinite(d)], default=0.0)
+    return float(min(max(4 * ctx["curve_tol"], 2.0 * dev), 0.5 * ctx["mean_edge"]))
+
+
+def _is_closed(F) -> bool:
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    _, counts = np.unique(E, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
+def _faceted_result(V, F, ctx, closed, timings, message):
+    t = time.perf_counter()
+    faces = faceted.triangle_faces(V, F, ctx["vertex_tol"])
+    shape, _ = assemble(faces, max(ctx["vertex_tol"], 1e-6 * ctx["diag"]), closed, unify=False)
+    timings["faceted"] = time.perf_counter() - t
+    return shape
+
+
+def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadResult:
+    """Sewn B-Rep of a segmented mesh with one fitted surface per segment.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Vertex positions.
+    F : (m, 3) int64
+        Consistently oriented manifold triangles (outward when closed).
+    labels : (m,) int64
+        Segment of every face, ``0..k-1``, each segment face-connected.
+    surfaces : list of Surface
+        ``surfaces[a]`` fitted to segment ``a`` (``outward`` as in the fit).
+    uv : list of (ids, UV) or None, optional
+        Per segment, ``None`` or a bijective chart: vertex ids ``(p,)`` and ``UV (p, 2)``;
+        used for freeform segments (a disk segment without one gets a harmonic chart).
+    tol : float, optional
+        Modelling tolerance (model units): segments farther than this from their surface are
+        faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal.
+    progress : callable, optional
+        ``progress(stage, fraction)``.
+
+    Returns
+    -------
+    CadResult
+        Never raises for geometry it cannot build: such faces are faceted and reported, and
+        a failed build returns the fully faceted model (``faceted_model=True``).
+
+    Raises
+    ------
+    MeshError
+        Malformed input arrays.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[x, y, z] for x in (0., 1.) for y in (0., 1.) for z in (0., 1.)])
+    >>> F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+    ...               [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    >>> labels = np.repeat(np.arange(6), 2)
+    >>> normals = [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)]
+    >>> surfs = [Surface("plane", {"point": V[F[2 * i, 0]], "normal": np.array(n, float)})
+    ...          for i, n in enumerate(normals)]
+    >>> res = build_brep(V, F, labels, surfs)
+    >>> res.fidelity["valid"], res.fidelity["solids"], round(res.fidelity["volume"], 9)
+    (True, 1, 1.0)
+    """
+    V, F, labels = _validate(V, F, labels, surfaces, uv)
+    progress = progress or (lambda stage, frac: None)
+    ctx = _tolerances(V, F, surfaces, tol)
+    ctx["builder"], ctx["vtols"] = BRep_Builder(), {}
+    closed = _is_closed(F)
+    timings: dict = {}
+    try:
+        faces, status, sew_tol = _build_faces(V, F, labels, surfaces, uv, ctx, timings,
+                                              progress)
+        t = time.perf_counter()
+        progress("sew", 0.0)
+        shape, info = assemble(faces, sew_tol, closed)
+        timings["sew"] = time.perf_counter() - t
+        message = "" if info["solid"] or not closed else "closed mesh but the shell is open"
+        faceted_model = False
+    except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
+        logger.exception("B-Rep build failed; writing the faceted model")
+        shape = _faceted_result(V, F, ctx, closed, timings, str(exc))
+        status = [dict(index=a, kind=s.kind, status="faceted", reason=f"build failed: {exc}",
+                       max_dev=None) for a, s in enumerate(surfaces)]
+        sew_tol, faceted_model, message = None, True, f"build failed ({exc}); faceted model"
+    t = time.perf_counter()
+    progress("fidelity", 0.0)
+    fid = brep_fidelity(shape, V, F)
+    timings["fidelity"] = time.perf_counter() - t
+    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
+    tols["sew_tol"] = sew_tol
+    progress("fidelity", 1.0)
+    return CadResult(shape, status, fid, timings, tols, faceted_model, message)
+
+
+def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
+    """Surfaces, vertices, edges and faces; (faces, per-face status, sewing tolerance)."""
+    k = len(surfaces)
+    t = time.perf_counter()
+    graph = boundary_graph(V, F, labels, k)
+    seg_faces = [np.flatnonzero(labels == a) for a in range(k)]
+    timings["topology"] = time.perf_counter() - t
+    t = time.perf_counter()
+    geoms, projs, devs, reasons = [], [], [], []
+    for a, s in enumerate(surfaces):
+        progress("surfaces", a / k)
+        g, p, d, r = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+        geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
+    timings["surfaces"] = time.perf_counter() - t
+    ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons) if r is None])
+    t = time.perf_counter()
+    pos = _place_vertices(V, graph, projs, ctx["tol"], ctx)
+    vertices = {v: _vertex(ctx["builder"], X, ctx["vertex_tol"]) for v, X in pos.items()}
+    snap = V.copy()
+    for v, X in pos.items():
+        snap[v] = X
+    edges = []
+    for i, ch in enumerate(graph.chains):
+        progress("edges", i / max(len(graph.chains), 1))
+        edges.append(_edge(ch, V, pos, projs, vertices, ctx, snap))
+    timings["edges"] = time.perf_counter() - t
+    t = time.perf_counter()
+    faces, status = [], []
+    areas = _segment_areas(V, F, labels, k)
+    for a in range(k):
+        progress("faces", a / k)
+        face, reason = (None, reasons[a]) if geoms[a] is None else _face(
+            a, geoms[a], graph.loops[a], edges, ctx, areas[a])
+        if face is not None:
+            faces.append(face)
+        else:
+            logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
+            faces.extend(faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"]))
+        status.append(dict(index=a, kind=surfaces[a].kind,
+                           status="built" if face is not None else "faceted", reason=reason,
+                           max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
+    timings["faces"] = time.perf_counter() - t
+    return faces, status, ctx["sew_tol"]
+
+
+def _segment_areas(V, F, labels, k):
+    import igl
+
+    return np.bincount(labels, weights=0.5 * igl.doublearea(V, F).ravel(), minlength=k)

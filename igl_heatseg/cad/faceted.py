@@ -1,0 +1,74 @@
+"""Faceted stand-ins: a segment's triangles as planar OCC faces (for faces that cannot be
+built, or the whole model when the build fails)."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
+from OCP.gp import gp_Pnt  # noqa: E402
+from OCP.TopoDS import TopoDS_Vertex, TopoDS_Wire  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["triangle_faces"]
+
+#: Triangles with a doubled area below this fraction of the squared bbox diagonal are skipped
+#: (OCC cannot make a plane through them; the sewing closes the sliver).
+DEGENERATE_AREA_REL = 1e-14
+
+
+def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
+    """Planar faces of triangles, sharing vertices and edges between adjacent triangles.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+        Triangles (orientation kept: face normals follow the triangle order).
+    tol : float
+        Vertex and edge tolerance.
+
+    Returns
+    -------
+    list of TopoDS_Face
+    """
+    builder = BRep_Builder()
+    verts, edges, faces = {}, {}, []
+    diag2 = float(np.sum((V.max(axis=0) - V.min(axis=0)) ** 2)) if len(V) else 1.0
+
+    def vertex(i):
+        if i not in verts:
+            v = TopoDS_Vertex()
+            builder.MakeVertex(v, gp_Pnt(*map(float, V[i])), tol)
+            verts[i] = v
+        return verts[i]
+
+    def edge(i, j):
+        key = (min(i, j), max(i, j))
+        if key not in edges:
+            a, b = key
+            edges[key] = BRepBuilderAPI_MakeEdge(vertex(a), vertex(b)).Edge()
+        e = edges[key]
+        return e if i < j else e.Reversed()
+
+    for tri in np.asarray(F, dtype=np.int64).tolist():
+        a, b, c = V[tri]
+        if np.sum(np.cross(b - a, c - a) ** 2) <= (DEGENERATE_AREA_REL * diag2) ** 2:
+            continue
+        w = TopoDS_Wire()
+        builder.MakeWire(w)
+        for i, j in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            builder.Add(w, edge(i, j))
+        w.Closed(True)
+        mk = BRepBuilderAPI_MakeFace(w, True)
+        if mk.IsDone():
+            faces.append(mk.Face())
+    return faces

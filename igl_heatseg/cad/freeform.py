@@ -1,0 +1,194 @@
+"""Freeform segments: a UV chart and a least-squares B-spline surface over it.
+
+The chart (given, or harmonic onto the unit disk when the segment is a disk) is sampled on a
+regular (u, v) grid: grid points inside the chart take the barycentric interpolation of the
+3D vertex positions of the chart triangle holding them, the others a biharmonic extension over
+the grid (smooth, continuing the slopes at the chart border).  The grid is approximated by
+``GeomAPI_PointsToBSplineSurface`` with iso-parametric parameters, so grid (u, v) maps
+linearly to the surface parameters and the fit error is measured at every mesh vertex.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from scipy.spatial import cKDTree
+
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.Approx import Approx_ParametrizationType  # noqa: E402
+from OCP.collections import Array2_gp_Pnt  # noqa: E402
+from OCP.GeomAbs import GeomAbs_Shape  # noqa: E402
+from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface  # noqa: E402
+from OCP.gp import gp_Pnt  # noqa: E402
+
+from .geometry import DEG_MAX, DEG_MIN  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["disk_chart", "freeform_surface"]
+
+#: Grid sizes tried in turn for a freeform patch; the first one meeting the tolerance is kept.
+FREEFORM_GRIDS = (12, 20, 32, 48, 64)
+
+#: Margin added around a chart's UV box (fraction of its size) so that trimming curves lie
+#: strictly inside the patch.
+UV_MARGIN = 0.03
+
+#: Nearest triangle centroids searched when locating a grid point in the chart.
+LOCATE_K = 12
+
+#: Barycentric slack for "inside a chart triangle" (round-off on shared edges).
+BARY_EPS = 1e-9
+
+
+def disk_chart(V: np.ndarray, F: np.ndarray):
+    """Harmonic map of a disk-like mesh onto the unit disk, or None when it is not a disk.
+
+    Parameters
+    ----------
+    V : (p, 3) float64
+    F : (q, 3) int64
+        A face-connected segment, compact vertex indices.
+
+    Returns
+    -------
+    UV : (p, 2) float64 or None
+        Counter-clockwise (positive triangle areas) when the mesh normals are seen from above.
+    """
+    nv = len(np.unique(F))
+    edges = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
+    if nv - len(edges) + len(F) != 1 or nv != len(V):
+        return None
+    bnd = igl.boundary_loop(F)
+    if len(bnd) < 3:
+        return None
+    bc = igl.map_vertices_to_circle(V, bnd)
+    UV = igl.harmonic(V, F, bnd, bc, 1)
+    area = _signed_areas(UV, F)
+    if np.all(area < 0):
+        UV[:, 0] *= -1.0
+        area = -area
+    if not np.all(area > 0):
+        return None
+    return UV
+
+
+def _signed_areas(UV, F):
+    a, b, c = UV[F[:, 0]], UV[F[:, 1]], UV[F[:, 2]]
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+
+
+def _locate(UV, F, Q):
+    """Chart triangle and barycentric coordinates of query points (tri = -1 when outside)."""
+    cent = UV[F].mean(axis=1)
+    k = min(LOCATE_K, len(F))
+    _, cand = cKDTree(cent).query(Q, k=k)
+    cand = cand.reshape(len(Q), k)
+    a, b, c = UV[F[cand, 0]], UV[F[cand, 1]], UV[F[cand, 2]]
+    v0, v1, v2 = b - a, c - a, Q[:, None, :] - a
+    den = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
+    den = np.where(np.abs(den) > 0, den, 1e-300)
+    l1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / den
+    l2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / den
+    bary = np.stack([1 - l1 - l2, l1, l2], axis=-1)
+    best = np.argmax(bary.min(axis=-1), axis=1)
+    rows = np.arange(len(Q))
+    tri = cand[rows, best]
+    w = bary[rows, best]
+    tri = np.where(w.min(axis=1) >= -BARY_EPS, tri, -1)
+    return tri, w
+
+
+def _grid_laplacian(g: int) -> sp.csr_matrix:
+    """Graph Laplacian of a g x g grid (4-neighbours)."""
+    d = sp.diags([np.ones(g - 1), np.ones(g - 1)], [-1, 1], shape=(g, g))
+    A = sp.kron(sp.identity(g), d) + sp.kron(d, sp.identity(g))
+    return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
+
+
+def _grid_points(V, F, UV, g, box):
+    """3D samples on a g x g grid over the UV box (inside: interpolated; outside: extended)."""
+    u = np.linspace(box[0], box[1], g)
+    v = np.linspace(box[2], box[3], g)
+    Q = np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
+    tri, w = _locate(UV, F, Q)
+    inside = tri >= 0
+    X = np.zeros((len(Q), 3))
+    X[inside] = np.einsum("pk,pkd->pd", w[inside], V[F[tri[inside]]])
+    if not inside.all():
+        L = _grid_laplacian(g)
+        Qm = (L.T @ L).tocsr()
+        out = np.flatnonzero(~inside)
+        kn = np.flatnonzero(inside)
+        A = Qm[out][:, out].tocsc()
+        X[out] = spla.spsolve(A, -(Qm[out][:, kn] @ X[kn])).reshape(len(out), 3)
+    return X.reshape(g, g, 3)
+
+
+def _approximate(grid: np.ndarray, tol: float):
+    g = grid.shape[0]
+    arr = Array2_gp_Pnt(1, g, 1, g)
+    for i in range(g):
+        for j in range(g):
+            x = grid[i, j]
+            arr.SetValue(i + 1, j + 1, gp_Pnt(float(x[0]), float(x[1]), float(x[2])))
+    fit = GeomAPI_PointsToBSplineSurface(arr, Approx_ParametrizationType.Approx_IsoParametric,
+                                         DEG_MIN, DEG_MAX, GeomAbs_Shape.GeomAbs_C2, float(tol))
+    if not fit.IsDone():
+        return None
+    return fit.Surface()
+
+
+def _vertex_error(surf, V, UV, box):
+    u0, u1, v0, v1 = surf.Bounds()
+    su = u0 + (UV[:, 0] - box[0]) / (box[1] - box[0]) * (u1 - u0)
+    sv = v0 + (UV[:, 1] - box[2]) / (box[3] - box[2]) * (v1 - v0)
+    err = 0.0
+    for p, a, b in zip(V, su, sv):
+        q = surf.Value(float(a), float(b))
+        err = max(err, float(np.linalg.norm(p - (q.X(), q.Y(), q.Z()))))
+    return err
+
+
+def freeform_surface(V: np.ndarray, F: np.ndarray, UV: np.ndarray, tol: float):
+    """Least-squares B-spline surface over a segment's chart.
+
+    Parameters
+    ----------
+    V : (p, 3) float64
+    F : (q, 3) int64
+        The segment, compact vertex indices.
+    UV : (p, 2) float64
+        A bijective chart with positive triangle areas.
+    tol : float
+        Largest accepted distance between a mesh vertex and its image ``S(UV)``.
+
+    Returns
+    -------
+    surface : Geom_BSplineSurface or None
+        The first grid of :data:`FREEFORM_GRIDS` meeting ``tol`` (else the finest tried).
+    err : float
+        Largest ``|S(UV_i) - V_i|`` over the segment's vertices.
+    """
+    lo, hi = UV.min(axis=0), UV.max(axis=0)
+    pad = UV_MARGIN * (hi - lo).max()
+    box = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
+    best, best_err = None, np.inf
+    for g in FREEFORM_GRIDS:
+        surf = _approximate(_grid_points(V, F, UV, g, box), 0.25 * tol)
+        if surf is None:
+            continue
+        err = _vertex_error(surf, V, UV, box)
+        logger.debug("freeform grid %d: error %.3g (tol %.3g)", g, err, tol)
+        if err < best_err:
+            best, best_err = surf, err
+        if err <= tol:
+            break
+    return best, best_err

@@ -1,0 +1,274 @@
+"""OpenCASCADE geometry from our types: surfaces, edge curves, B-spline patches.
+
+Analytic :class:`~igl_heatseg.surfaces.model.Surface` objects become ``Geom_*`` surfaces whose
+normal (``D1u x D1v``) points like the segment's mesh normals; points are moved onto one or
+several surfaces by Gauss-Newton on the signed distances (:func:`onto_surfaces`); edge curves
+are exact lines and circles when the points allow it, else least-squares B-splines; freeform
+segments get a B-spline surface in :mod:`.freeform`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.collections import Array1_gp_Pnt  # noqa: E402
+from OCP.GC import GC_MakeSegment  # noqa: E402
+from OCP.Geom import (  # noqa: E402
+    Geom_Circle,
+    Geom_ConicalSurface,
+    Geom_CylindricalSurface,
+    Geom_Plane,
+    Geom_SphericalSurface,
+    Geom_ToroidalSurface,
+)
+from OCP.GeomAbs import GeomAbs_Shape  # noqa: E402
+from OCP.GeomAPI import GeomAPI_PointsToBSpline, GeomAPI_ProjectPointOnSurf  # noqa: E402
+from OCP.GeomLProp import GeomLProp_SLProps  # noqa: E402
+from OCP.gp import gp_Ax2, gp_Ax3, gp_Dir, gp_Pnt  # noqa: E402
+
+from igl_heatseg.surfaces.model import Surface  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["occ_surface", "Projector", "onto_surfaces", "edge_curve"]
+
+#: Singular values of the stacked surface normals below this fraction of the largest are
+#: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
+#: its plane) do not define their intersection well, and the step then only closes the
+#: distances along the mean normal, staying near the mesh.
+GN_RCOND = 0.15
+
+#: Gauss-Newton iterations; quadratic convergence makes a handful enough for analytic pairs.
+GN_ITERS = 12
+
+#: Points on a line or circle within this fraction of the bbox diagonal make an exact
+#: Geom_Line / Geom_Circle edge (points on an analytic intersection sit at ~1e-12).
+EXACT_CURVE_REL = 1e-8
+
+#: B-spline degree bounds for edge curves and freeform patches (cubic up to OCC's default 8).
+DEG_MIN, DEG_MAX = 3, 8
+
+
+def _pnt(p) -> gp_Pnt:
+    return gp_Pnt(float(p[0]), float(p[1]), float(p[2]))
+
+
+def _dir(d) -> gp_Dir:
+    return gp_Dir(float(d[0]), float(d[1]), float(d[2]))
+
+
+def _any_perp(a) -> np.ndarray:
+    """A unit vector perpendicular to ``a``."""
+    a = np.asarray(a, dtype=np.float64)
+    v = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+    return v / np.linalg.norm(v)
+
+
+def _ax3(origin, axis, outward: bool) -> gp_Ax3:
+    """Right-handed frame (normal away from the axis) or, for ``outward=False``, left-handed."""
+    ax = gp_Ax3(_pnt(origin), _dir(axis), _dir(_any_perp(axis)))
+    if not outward:
+        ax.YReverse()
+    return ax
+
+
+def occ_surface(s: Surface):
+    """OCC surface of an analytic :class:`Surface`, normal oriented like its mesh normals.
+
+    Parameters
+    ----------
+    s : Surface
+        Kind plane, cylinder, cone, sphere or torus.
+
+    Returns
+    -------
+    Geom_Surface
+        ``Geom_Plane`` (normal = ``params['normal']``), or a cylinder, cone, sphere or torus
+        whose frame is right-handed (normal pointing away from the axis / centre) when
+        ``s.outward`` and left-handed otherwise.
+    """
+    p = s.params
+    if s.kind == "plane":
+        return Geom_Plane(_ax3(p["point"], p["normal"], True))
+    if s.kind == "cylinder":
+        return Geom_CylindricalSurface(_ax3(p["point"], p["axis"], s.outward), float(p["radius"]))
+    if s.kind == "cone":
+        return Geom_ConicalSurface(_ax3(p["apex"], p["axis"], s.outward),
+                                   float(p["half_angle"]), 0.0)
+    if s.kind == "sphere":
+        return Geom_SphericalSurface(_ax3(p["center"], [0.0, 0.0, 1.0], s.outward),
+                                     float(p["radius"]))
+    if s.kind == "torus":
+        return Geom_ToroidalSurface(_ax3(p["center"], p["axis"], s.outward),
+                                    float(p["major_radius"]), float(p["minor_radius"]))
+    raise ValueError(f"no analytic OCC surface for kind {s.kind!r}")
+
+
+def _analytic_gradient(s: Surface, X: np.ndarray) -> np.ndarray:
+    """Gradient of ``s.distance`` at points X on the surface (unit, pointing to d > 0)."""
+    p = s.params
+    if s.kind == "plane":
+        return np.broadcast_to(p["normal"], X.shape).copy()
+    if s.kind == "sphere":
+        D = X - p["center"]
+        return D / np.maximum(np.linalg.norm(D, axis=1), 1e-300)[:, None]
+    origin = p["point"] if s.kind == "cylinder" else p.get("apex", p.get("center"))
+    a = p["axis"]
+    Q = X - origin
+    R = Q - np.outer(Q @ a, a)
+    r = np.linalg.norm(R, axis=1)
+    U = np.where(r[:, None] > 0, R / np.maximum(r, 1e-300)[:, None], _any_perp(a))
+    if s.kind == "cylinder":
+        return U
+    if s.kind == "cone":
+        return math.cos(p["half_angle"]) * U - math.sin(p["half_angle"]) * a
+    D = X - (origin + p["major_radius"] * U)
+    return D / np.maximum(np.linalg.norm(D, axis=1), 1e-300)[:, None]
+
+
+class Projector:
+    """Signed distance and its gradient for one segment's surface (analytic or B-spline).
+
+    Parameters
+    ----------
+    surface : Surface or None
+        The analytic surface; None for a B-spline given as ``geom``.
+    geom : Geom_Surface, optional
+        The OCC surface (required for B-splines; its normal defines the distance sign).
+    """
+
+    def __init__(self, surface: Surface | None, geom=None):
+        self.surface = surface if surface is not None and surface.is_analytic else None
+        self.geom = geom
+        if self.surface is None:
+            self._proj = GeomAPI_ProjectPointOnSurf()
+            self._proj.Init(geom, *geom.Bounds())
+
+    def residual(self, P: np.ndarray):
+        """Signed distances ``(p,)`` and unit gradients ``(p,3)`` at points ``P (p,3)``."""
+        if self.surface is not None:
+            X = self.surface.project(P)
+            return self.surface.distance(P), _analytic_gradient(self.surface, X)
+        d = np.zeros(len(P))
+        N = np.zeros((len(P), 3))
+        for i, q in enumerate(P):
+            pt = _pnt(q)
+            self._proj.Perform(pt)
+            if not self._proj.IsDone() or self._proj.NbPoints() == 0:
+                d[i], N[i] = 0.0, 0.0
+                continue
+            u, v = self._proj.LowerDistanceParameters()
+            props = GeomLProp_SLProps(self.geom, u, v, 1, 1e-9)
+            if not props.IsNormalDefined():
+                continue
+            n = props.Normal()
+            X = props.Value()
+            N[i] = (n.X(), n.Y(), n.Z())
+            d[i] = (q - np.array([X.X(), X.Y(), X.Z()])) @ N[i]
+        return d, N
+
+
+def onto_surfaces(P: np.ndarray, projectors: list, iters: int = GN_ITERS):
+    """Move points to the nearest common point of several surfaces (Gauss-Newton).
+
+    Parameters
+    ----------
+    P : (p, 3) float64
+        Start points (mesh vertices or boundary samples).
+    projectors : list of Projector
+        One to three surfaces.
+
+    Returns
+    -------
+    X : (p, 3) float64
+        Moved points; directions the surfaces do not pin down (ill-conditioned intersections,
+        see :data:`GN_RCOND`) keep the start point's coordinate.
+    res : (p,) float64
+        Largest absolute signed distance of each moved point to the surfaces.
+    """
+    X = np.array(P, dtype=np.float64, copy=True)
+    for _ in range(iters):
+        parts = [pr.residual(X) for pr in projectors]
+        r = np.stack([d for d, _ in parts], axis=1)  # (p, s)
+        J = np.stack([n for _, n in parts], axis=1)  # (p, s, 3)
+        step = np.einsum("pij,pj->pi", np.linalg.pinv(J, rcond=GN_RCOND), r)
+        X -= step
+        if np.abs(step).max(initial=0.0) < 1e-15 * (1.0 + np.abs(X).max()):
+            break
+    res = np.abs(np.stack([pr.residual(X)[0] for pr in projectors], axis=1)).max(axis=1)
+    return X, res
+
+
+def _circle_fit(P: np.ndarray):
+    """Centre, unit normal and radius of the least-squares circle through P, and residual."""
+    c0 = P.mean(axis=0)
+    _, sv, Vt = np.linalg.svd(P - c0)
+    n = Vt[2]
+    planar = np.abs((P - c0) @ n).max()
+    e1, e2 = Vt[0], Vt[1]
+    xy = np.c_[(P - c0) @ e1, (P - c0) @ e2]
+    A = np.c_[2 * xy, np.ones(len(xy))]
+    sol, *_ = np.linalg.lstsq(A, (xy**2).sum(axis=1), rcond=None)
+    cxy = sol[:2]
+    R = math.sqrt(max(sol[2] + cxy @ cxy, 0.0))
+    C = c0 + cxy[0] * e1 + cxy[1] * e2
+    res = max(planar, np.abs(np.linalg.norm(xy - cxy, axis=1) - R).max())
+    return C, n, R, res
+
+
+def edge_curve(P: np.ndarray, tol: float, scale: float):
+    """An OCC curve through ordered points, exact line or circle when possible.
+
+    Parameters
+    ----------
+    P : (q, 3) float64
+        Points along the edge, ``q >= 2``; ``P[0] == P[-1]`` for a closed edge.
+    tol : float
+        Approximation tolerance of a B-spline curve (model units).
+    scale : float
+        Model size (bbox diagonal) for the exact-curve test (:data:`EXACT_CURVE_REL`).
+
+    Returns
+    -------
+    curve : Geom_Curve
+    t0, t1 : float
+        Parameters of ``P[0]`` and ``P[-1]`` (``t1 > t0``).
+    """
+    closed = bool(np.linalg.norm(P[0] - P[-1]) <= EXACT_CURVE_REL * scale)
+    exact = EXACT_CURVE_REL * scale
+    d = P[-1] - P[0]
+    L = float(np.linalg.norm(d))
+    if not closed and L > exact:
+        u = d / L
+        off = (P - P[0]) - np.outer((P - P[0]) @ u, u)
+        if np.linalg.norm(off, axis=1).max() <= exact:
+            seg = GC_MakeSegment(_pnt(P[0]), _pnt(P[-1])).Value()
+            return seg, seg.FirstParameter(), seg.LastParameter()
+    if len(P) >= 4:
+        C, n, R, res = _circle_fit(P[:-1] if closed else P)
+        if res <= exact and R > exact:
+            turn = np.cross(P[:-1] - C, P[1:] - C).sum(axis=0)
+            if turn @ n < 0:
+                n = -n
+            x = (P[0] - C) / np.linalg.norm(P[0] - C)
+            circ = Geom_Circle(gp_Ax2(_pnt(C), _dir(n), _dir(x)), R)
+            if closed:
+                return circ, 0.0, 2 * math.pi
+            e = P[-1] - C
+            t1 = math.atan2(e @ np.cross(n, x), e @ x) % (2 * math.pi)
+            return circ, 0.0, t1 if t1 > 0 else 2 * math.pi
+    arr = Array1_gp_Pnt(1, len(P))
+    for i, q in enumerate(P):
+        arr.SetValue(i + 1, _pnt(q))
+    deg_min = min(DEG_MIN, len(P) - 1)
+    fit = GeomAPI_PointsToBSpline(arr, deg_min, max(DEG_MAX, deg_min), GeomAbs_Shape.GeomAbs_C2,
+                                  float(tol))
+    curve = fit.Curve()
+    return curve, curve.FirstParameter(), curve.LastParameter()

@@ -1,0 +1,106 @@
+"""Faces to a shell or solid: sewing, shape fixing, same-domain unification, solid making."""
+
+from __future__ import annotations
+
+import logging
+
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing  # noqa: E402
+from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
+from OCP.BRepGProp import BRepGProp  # noqa: E402
+from OCP.GProp import GProp_GProps  # noqa: E402
+from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
+from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
+from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
+from OCP.TopExp import TopExp_Explorer  # noqa: E402
+from OCP.TopoDS import TopoDS  # noqa: E402
+
+from .fidelity import count_free_edges  # noqa: E402
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["assemble"]
+
+
+def _shells(shape) -> list:
+    out, ex = [], TopExp_Explorer(shape, TopAbs_SHELL)
+    while ex.More():
+        out.append(TopoDS.Shell(ex.Current()))
+        ex.Next()
+    return out
+
+
+def _unify(shape):
+    """Merge faces on the same surface (and edges on the same curve); keep input on failure."""
+    try:
+        uni = ShapeUpgrade_UnifySameDomain(shape, True, True, False)
+        uni.Build()
+        out = uni.Shape()
+        if BRepCheck_Analyzer(out).IsValid() or not BRepCheck_Analyzer(shape).IsValid():
+            return out
+    except Exception as exc:  # OCC raises Standard_Failure subclasses
+        logger.warning("UnifySameDomain failed (%s); keeping the sewn faces", exc)
+    return shape
+
+
+def _solid(shell):
+    """A valid solid from a closed shell, outward oriented, or None."""
+    mk = BRepBuilderAPI_MakeSolid(shell)
+    if not mk.IsDone():
+        return None
+    fix = ShapeFix_Solid(mk.Solid())
+    fix.Perform()
+    solid = fix.Solid()
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(solid, props)
+    if props.Mass() < 0:
+        solid.Reverse()
+    return solid
+
+
+def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
+    """Sew faces into a shell (and a solid when ``closed`` and the shell closes).
+
+    Parameters
+    ----------
+    faces : list of TopoDS_Face
+    sew_tol : float
+        Sewing tolerance (model units): gaps up to this size are closed.
+    closed : bool
+        Whether the mesh was closed (then a solid is attempted).
+    unify : bool
+        Run ``ShapeUpgrade_UnifySameDomain``.
+
+    Returns
+    -------
+    shape : TopoDS_Shape
+        A solid, a shell, or the sewn compound.
+    info : dict
+        ``free_edges_after_sewing``, ``solid`` (bool).
+    """
+    sew = BRepBuilderAPI_Sewing(float(sew_tol))
+    for f in faces:
+        sew.Add(f)
+    sew.Perform()
+    shape = sew.SewedShape()
+    fix = ShapeFix_Shape(shape)
+    fix.SetPrecision(float(sew_tol) * 1e-2)
+    fix.SetMaxTolerance(float(sew_tol))
+    fix.Perform()
+    shape = fix.Shape()
+    if unify:
+        shape = _unify(shape)
+    info = {"free_edges_after_sewing": count_free_edges(shape), "solid": False}
+    shells = _shells(shape)
+    if closed and len(shells) == 1 and info["free_edges_after_sewing"] == 0:
+        solid = _solid(shells[0])
+        if solid is not None and BRepCheck_Analyzer(solid).IsValid():
+            info["solid"] = True
+            return solid, info
+        logger.warning("closed shell did not make a valid solid; returning the shell")
+    if len(shells) == 1:
+        return shells[0], info
+    return shape, info

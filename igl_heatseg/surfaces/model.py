@@ -185,6 +185,50 @@ class Surface:
             return origin + t[:, None] * g
         return P.copy()
 
+    def normals(self, P) -> np.ndarray:
+        """Unit gradient of :meth:`distance`: the surface normal at each point's closest point,
+        pointing towards positive distance.
+
+        Parameters
+        ----------
+        P : (p, 3) array_like
+            Points.
+
+        Returns
+        -------
+        G : (p, 3) float64
+            Unit vectors (for a point on an axis or at a centre, an arbitrary one of the
+            candidate directions). ``nan`` for ``freeform``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> s = Surface("cylinder", {"point": np.zeros(3), "axis": np.array([0.0, 0.0, 1.0]),
+        ...                          "radius": 1.0})
+        >>> s.normals(np.array([[0.0, 3.0, 5.0]]))
+        array([[0., 1., 0.]])
+        """
+        P = np.atleast_2d(np.asarray(P, dtype=np.float64))
+        p = self.params
+        if self.kind == "plane":
+            return np.tile(np.asarray(p["normal"], dtype=np.float64), (len(P), 1))
+        if self.kind == "sphere":
+            return _unit_rows(P - p["center"], _any_perp(None))
+        if self.kind == "freeform":
+            return np.full((len(P), 3), np.nan)
+        origin = p["point"] if self.kind == "cylinder" else p.get("apex", p.get("center"))
+        a = p["axis"]
+        h, r, R = self._radial(P, origin, a)
+        U = _unit_rows(R, _any_perp(a))
+        if self.kind == "cylinder":
+            return U
+        if self.kind == "torus":
+            return _unit_rows(P - (origin + p["major_radius"] * U), U)
+        ca, sa = math.cos(p["half_angle"]), math.sin(p["half_angle"])
+        G = ca * U - sa * np.asarray(a, dtype=np.float64)
+        behind = h * ca + r * sa < 0  # closest point is the apex
+        return np.where(behind[:, None], _unit_rows(P - origin, G), G)
+
     def to_dict(self) -> dict:
         """JSON-ready description: kind, parameters as lists, rms, max_dev, area, outward."""
         out = {"type": self.kind}
@@ -197,6 +241,12 @@ class Surface:
 
 def _f(x: float):
     return None if x is None or not math.isfinite(x) else float(x)
+
+
+def _unit_rows(D: np.ndarray, fallback) -> np.ndarray:
+    """Rows of ``D`` normalised; zero rows replaced by ``fallback`` (broadcast to ``D``)."""
+    n = np.linalg.norm(D, axis=1)
+    return np.where(n[:, None] > 0, D / np.maximum(n, 1e-300)[:, None], fallback)
 
 
 def _any_perp(a):

@@ -1,0 +1,706 @@
+"""Least-squares fitting of planes, cylinders, cones, spheres and tori to mesh samples.
+
+Every analytic fit minimises the weighted sum of squared *geometric* (true point-to-surface)
+distances with Levenberg-Marquardt, from a seed computed in closed form from the points and their
+normals (Lukacs, Marshall & Martin 1998, "Faithful least-squares fitting of spheres, cylinders,
+cones and tori"; Eberly, "Least squares fitting of data"):
+
+* plane: weighted principal axes (exact, no iteration);
+* sphere: the point nearest to all normal lines (or an algebraic fit without normals);
+* cylinder: axis = least eigenvector of the normals' scatter (normals lie on a great circle),
+  then the point nearest to the normal lines in the cross-section;
+* cone: axis = normal of the plane through the normal vectors (they lie on a small circle), then
+  the cross-section centre and a line ``r = r0 + h tan(psi)`` through the (height, radius) pairs;
+* torus: axis = the line meeting all normal lines (a 6x6 Pluecker eigenproblem), then the tube
+  circle in the (radius, height) half-plane.
+
+The iterations work on centred, unit-spread coordinates and use parameterisations that stay
+regular as a kind degenerates into a simpler one (curvature instead of radius for spheres and
+cylinders, signed half-angle for cones), so a fit never returns ``nan``; it returns ``None``
+when its kind does not apply (a sphere through planar data, a cone on a cylinder, a torus whose
+major radius is far beyond the data), and :func:`fit_surface` falls back to the simpler kind.
+
+Signed distances, parameter names and ``outward`` follow :mod:`igl_heatseg.surfaces.model`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import igl
+import numpy as np
+from scipy.stats import chi2
+
+from ..errors import MeshError
+from .model import SURFACE_KINDS, Surface
+
+__all__ = [
+    "fit_plane",
+    "fit_sphere",
+    "fit_cylinder",
+    "fit_cone",
+    "fit_torus",
+    "fit_surface",
+    "surface_residual",
+    "within_tolerance",
+    "face_samples",
+    "face_residuals",
+    "noise_level",
+    "fit_tolerance",
+]
+
+log = logging.getLogger(__name__)
+
+#: A radius (or apex distance) beyond this many data spreads (RMS distance of the points to their
+#: centroid) is indistinguishable from the simpler kind: the sagitta over the data is below
+#: 1e-4 spread, under any tolerance this module derives, so the fit returns ``None``.
+FAR_RATIO = 1e4
+#: A torus whose major radius is below this fraction of its minor radius is a sphere.
+TORUS_MIN_MAJOR = 1e-3
+#: Levenberg-Marquardt: most iterations (a seeded fit converges in 3-10).
+LM_MAX_ITER = 40
+#: Stop when an iteration lowers the cost by less than this fraction (float64 noise is ~1e-16;
+#: parameters are then converged to ~1e-6 of the spread).
+LM_RTOL = 1e-10
+#: Stop when the step is below this (unit-spread coordinates).
+LM_XTOL = 1e-10
+#: Forward-difference step for the Jacobian (unit-spread coordinates, ~ sqrt(machine eps)).
+FD_STEP = 1e-7
+#: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
+#: well-spread samples the fitted parameters change by far less than the noise.
+LM_MAX_POINTS = 1500
+#: Relative eigenvalue / determinant below which a seed's linear system counts as singular.
+SEED_RCOND = 1e-9
+
+#: fit_surface: a more complex kind replaces a simpler one only when its RMS is below the
+#: simpler one's divided by this factor ...
+BEAT_FACTOR = 1.5
+#: ... and lower by at least this fraction of the tolerance (nested models: the complex kind
+#: always fits at least as well; it must explain clearly more than the noise to be chosen).
+BEAT_ABS = 0.25
+#: A fit is within tolerance when rms <= tol and max_dev <= MAX_DEV_FACTOR * tol (the largest of
+#: thousands of Gaussian residuals is ~4 sigma; a bump or a wrong kind shows up in max_dev).
+MAX_DEV_FACTOR = 3.0
+
+#: fit_tolerance: multiple of the noise level (rms of vertex noise; a fit's rms over vertices and
+#: face centroids is ~0.8 of it, so 2.5 leaves room for the noise estimate's own error).
+K_NOISE = 2.5
+#: fit_tolerance: multiple of the tessellation's chord (sagitta) error.
+K_CHORD = 1.0
+#: fit_tolerance: floor as a fraction of the mean edge length (float32 STL coordinates and
+#: exporters' rounding; keeps the tolerance > 0 on a perfect mesh).
+K_FLOOR = 1e-3
+#: Dihedral angles (radians) above this are creases, not tessellated curvature (exporters
+#: rarely use more than 30 degrees per facet).
+CREASE_ANGLE = math.radians(40.0)
+#: Dihedral angles below this are flat (no chord error to estimate).
+FLAT_ANGLE = math.radians(0.5)
+#: Quantile of the curved edges' chord errors taken as the mesh's chord error (robust to a few
+#: badly shaped facets, covers the coarser curved surfaces).
+CHORD_QUANTILE = 0.9
+#: noise_level: least 1-ring size (vertex + neighbours) to fit a 6-coefficient quadric with
+#: at least one residual degree of freedom.
+QUAD_MIN_POINTS = 7
+
+_MIN_POINTS = {"plane": 3, "sphere": 4, "cylinder": 5, "cone": 6, "torus": 7}
+
+
+# ----------------------------------------------------------------------------- input checks
+
+
+def _as_points(P, name: str = "P") -> np.ndarray:
+    A = np.asarray(P, dtype=np.float64)
+    if A.ndim != 2 or A.shape[1] != 3:
+        raise MeshError(f"{name} must have shape (p, 3), got {A.shape}")
+    if not np.all(np.isfinite(A)):
+        raise MeshError(f"{name} (shape {A.shape}) has non-finite entries")
+    return A
+
+
+def _check_inputs(P, N, w, need_normals: bool):
+    """Validated ``P``, ``N`` (or None) and weights normalised to sum 1."""
+    P = _as_points(P)
+    if N is None:
+        if need_normals:
+            raise MeshError(f"N is required for this fit (P has shape {P.shape})")
+    else:
+        N = _as_points(N, "N")
+        if N.shape != P.shape:
+            raise MeshError(f"N must have the shape of P {P.shape}, got {N.shape}")
+    if w is None:
+        w = np.full(len(P), 1.0 / max(len(P), 1))
+    else:
+        w = np.asarray(w, dtype=np.float64)
+        if w.shape != (len(P),):
+            raise MeshError(f"w must have shape ({len(P)},), got {w.shape}")
+        if not np.all(np.isfinite(w)) or np.any(w < 0) or not w.sum() > 0:
+            raise MeshError(f"w (shape {w.shape}) must be finite, >= 0, with a positive sum")
+        w = w / w.sum()
+    return P, N, w
+
+
+def _check_mesh(V, F):
+    V = _as_points(V, "V")
+    F = np.asarray(F)
+    if F.ndim != 2 or F.shape[1] != 3 or not np.issubdtype(F.dtype, np.integer):
+        raise MeshError(f"F must be an integer array of shape (m, 3), got {F.dtype} {F.shape}")
+    if len(F) == 0 or F.min() < 0 or F.max() >= len(V):
+        raise MeshError(f"F (shape {F.shape}) must be non-empty with indices in [0, {len(V)})")
+    return V, F.astype(np.int64)
+
+
+# ----------------------------------------------------------------------------- small helpers
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else np.array([0.0, 0.0, 1.0])
+
+
+def _frame(a: np.ndarray):
+    """Two unit vectors completing ``a`` to an orthonormal frame."""
+    u = _unit(np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))]))
+    return u, np.cross(a, u)
+
+
+def _chart(a0, u0, v0, s, t):
+    """Unit vector near ``a0``: ``a0 + s u0 + t v0`` normalised (a chart of the sphere)."""
+    return _unit(a0 + s * u0 + t * v0)
+
+
+def _normalise(P, w):
+    """Weighted centroid ``m`` and spread ``s`` (RMS distance to ``m``; 1 when all coincide)."""
+    m = w @ P
+    s = math.sqrt(max(float(w @ np.einsum("ij,ij->i", P - m, P - m)), 0.0))
+    return m, (s if s > 0 else 1.0)
+
+
+def _subsample(p: int) -> np.ndarray:
+    """Evenly strided indices of at most LM_MAX_POINTS of ``p`` points (deterministic)."""
+    if p <= LM_MAX_POINTS:
+        return np.arange(p)
+    return np.linspace(0, p - 1, LM_MAX_POINTS).astype(np.int64)
+
+
+def _least_eig(M: np.ndarray):
+    """Eigenvalues (ascending) and the eigenvector of the least one, of a symmetric matrix."""
+    lam, E = np.linalg.eigh(M)
+    return lam, E[:, 0]
+
+
+def _nearest_to_lines(X, D, w):
+    """Point minimising the weighted squared distances to the lines ``X + t D`` (rows unit).
+
+    Works in any dimension; ``None`` when the lines are (nearly) parallel.
+    """
+    k = X.shape[1]
+    proj = np.eye(k)[None] - D[:, :, None] * D[:, None, :]
+    A = np.einsum("i,ijk->jk", w, proj)
+    b = np.einsum("i,ijk,ik->j", w, proj, X)
+    lam = np.linalg.eigvalsh(A)
+    if lam[0] <= SEED_RCOND * max(lam[-1], 1e-300):
+        return None
+    return np.linalg.solve(A, b)
+
+
+def _lm(res, x0, max_iter: int = LM_MAX_ITER):
+    """Levenberg-Marquardt on ``res(x) -> (p,)`` weighted residuals (forward-difference
+    Jacobian). Returns the parameters and the cost ``|res|^2``, or ``None`` if ``res(x0)`` is
+    not finite."""
+    x = np.asarray(x0, dtype=np.float64).copy()
+    r = res(x)
+    cost = float(r @ r)
+    if not math.isfinite(cost):
+        return None
+    lam = 1e-3
+    k = len(x)
+    J = np.empty((len(r), k))
+    for _ in range(max_iter):
+        for j in range(k):
+            xj = x.copy()
+            xj[j] += FD_STEP
+            J[:, j] = (res(xj) - r) * (1.0 / FD_STEP)
+        g, H = J.T @ r, J.T @ J
+        D = np.diag(np.diag(H) + 1e-12 * (np.trace(H) + 1e-300))
+        while lam < 1e12:
+            try:
+                step = np.linalg.solve(H + lam * D, -g)
+            except np.linalg.LinAlgError:
+                step = np.linalg.lstsq(H + lam * D, -g, rcond=None)[0]
+            rn = res(x + step)
+            cn = float(rn @ rn)
+            if math.isfinite(cn) and cn <= cost:
+                break
+            lam *= 10.0
+        else:
+            break
+        gain = cost - cn
+        x, r, cost = x + step, rn, cn
+        lam = max(lam * 0.1, 1e-12)
+        if gain <= LM_RTOL * cost + 1e-300 or np.linalg.norm(step) < LM_XTOL:
+            break
+    return x, cost
+
+
+def _finish(kind, params, P, N, w, area) -> Surface:
+    """A Surface with weighted rms, max_dev and outward from the normals."""
+    s = Surface(kind, params)
+    d = s.distance(P)
+    rms = math.sqrt(float(w @ (d * d)))
+    max_dev = float(np.max(np.abs(d[w > 0])))
+    outward = True
+    if N is not None and kind != "plane":
+        outward = bool(w @ np.einsum("ij,ij->i", N, s.normals(P)) >= 0)
+    if not (math.isfinite(rms) and math.isfinite(max_dev)):
+        return None
+    return Surface(kind, params, rms=rms, max_dev=max_dev, area=area, outward=outward)
+
+
+def _area(w_raw) -> float:
+    return math.nan if w_raw is None else float(np.sum(w_raw))
+
+
+def _curvature_seed(c, r, fallback_n):
+    """Seed ``(n, rho, kappa)`` of the curvature form from a centre ``c`` and radius ``r``:
+    ``n`` the outward normal at the surface point nearest the origin, ``rho`` its offset."""
+    if c is None or not math.isfinite(r) or r <= 0 or np.linalg.norm(c) <= 1e-9 * r:
+        return fallback_n, 0.0, 0.0
+    dc = float(np.linalg.norm(c))
+    n = -np.asarray(c) / dc
+    return n, r - dc, 1.0 / r
+
+
+def _curv_dist(x, n, kappa):
+    """Signed distance to the circle/sphere through ``0`` with normal ``n`` and curvature
+    ``kappa`` (positive along ``n``), stable as kappa -> 0 (a plane): Lukacs et al. eq. (3)."""
+    num = kappa * np.einsum("ij,ij->i", x, x) + 2.0 * (x @ n)
+    return num / (np.linalg.norm(kappa * x + n, axis=1) + 1.0)
+
+
+def _run_lm(make_res, X, wn, x0):
+    """LM on at most LM_MAX_POINTS strided samples, then a short polish on all points."""
+    idx = _subsample(len(X))
+    if len(idx) == len(X):
+        return _lm(make_res(X, np.sqrt(wn)), x0)
+    ws = wn[idx]
+    sol = _lm(make_res(X[idx], np.sqrt(ws / max(ws.sum(), 1e-300))), x0)
+    if sol is None:
+        return None
+    return _lm(make_res(X, np.sqrt(wn)), sol[0], max_iter=3)
+
+
+def _pca_normal(X, wn) -> np.ndarray:
+    return _least_eig((X * wn[:, None]).T @ X)[1]
+
+
+# ----------------------------------------------------------------------------- the fits
+
+
+def fit_plane(P, N=None, w=None) -> Surface | None:
+    """Weighted least-squares plane (exact: principal axes of the weighted scatter).
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points.
+    N : (p, 3) array_like, optional
+        Unit normals at the points; the plane normal is oriented like their weighted mean.
+        Without them the normal's largest component is made positive.
+    w : (p,) array_like, optional
+        Non-negative weights (e.g. face areas); uniform by default.
+
+    Returns
+    -------
+    Surface or None
+        ``plane`` with ``point`` = weighted centroid, unit ``normal``; ``rms`` (weighted) and
+        ``max_dev`` of the signed distances; ``area`` = sum of ``w`` (nan without weights).
+        ``None`` for fewer than 3 points.
+
+    Raises
+    ------
+    MeshError
+        On arrays of the wrong shape, non-finite values or weights without a positive sum.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0., 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]])
+    >>> s = fit_plane(P, N=np.tile([0., 0, -1], (4, 1)))
+    >>> (s.params["normal"] + 0.0).tolist(), round(s.rms, 12)
+    ([0.0, 0.0, -1.0], 0.0)
+    """
+    P, N, wn = _check_inputs(P, N, w, False)
+    if len(P) < _MIN_POINTS["plane"]:
+        return None
+    m = wn @ P
+    n = _pca_normal(P - m, wn)
+    if N is not None:
+        n = n if wn @ (N @ n) >= 0 else -n
+    else:
+        n = n if n[int(np.argmax(np.abs(n)))] > 0 else -n
+    return _finish("plane", {"point": m, "normal": n}, P, N, wn, _area(w))
+
+
+def _algebraic_sphere(X, wn):
+    """Centre and radius of the algebraic (Kasa) sphere ``|x|^2 = 2 c.x + k``; None if planar."""
+    sw = np.sqrt(wn)[:, None]
+    A = np.c_[2.0 * X, np.ones(len(X))] * sw
+    b = np.einsum("ij,ij->i", X, X) * sw[:, 0]
+    sol, _, rank, sv = np.linalg.lstsq(A, b, rcond=None)
+    if rank < 4 or sv[-1] <= SEED_RCOND * sv[0]:
+        return None, math.nan
+    c = sol[:3]
+    return c, math.sqrt(max(sol[3] + c @ c, 0.0))
+
+
+def fit_sphere(P, N=None, w=None) -> Surface | None:
+    """Geometric least-squares sphere.
+
+    Seeded by the point nearest to all normal lines (or an algebraic fit without normals), then
+    Levenberg-Marquardt on the true distances in the curvature form of Lukacs et al. (a point
+    ``q = rho n`` near the centroid, its normal ``n`` and the signed curvature ``kappa``), which
+    stays regular as the sphere flattens into a plane.
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points.
+    N : (p, 3) array_like, optional
+        Unit normals (seed and ``outward``).
+    w : (p,) array_like, optional
+        Non-negative weights.
+
+    Returns
+    -------
+    Surface or None
+        ``sphere`` (``center``, ``radius``) with weighted ``rms``, ``max_dev``, ``area`` = sum of
+        ``w``, ``outward`` True when the normals point away from the centre. ``None`` for fewer
+        than 4 points or when the radius exceeds FAR_RATIO data spreads (a plane).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> U = rng.normal(size=(50, 3)); U /= np.linalg.norm(U, axis=1)[:, None]
+    >>> s = fit_sphere(2.0 * U + [1, 2, 3], U)
+    >>> np.round(s.params["center"], 9), round(s.params["radius"], 9), s.outward
+    (array([1., 2., 3.]), 2.0, True)
+    """
+    P, N, wn = _check_inputs(P, N, w, False)
+    if len(P) < _MIN_POINTS["sphere"]:
+        return None
+    m, sc = _normalise(P, wn)
+    X = (P - m) / sc
+    c = _nearest_to_lines(X, N, wn) if N is not None else None
+    r = math.nan
+    if c is None:
+        c, r = _algebraic_sphere(X, wn)
+    if c is not None and not math.isfinite(r):
+        r = float(wn @ np.linalg.norm(X - c, axis=1))
+    n0, rho0, k0 = _curvature_seed(c, r, _pca_normal(X, wn))
+    u0, v0 = _frame(n0)
+
+    def make_res(Xa, sw):
+        def res(t):
+            n = _chart(n0, u0, v0, t[0], t[1])
+            return sw * _curv_dist(Xa - t[2] * n, n, t[3])
+        return res
+
+    sol = _run_lm(make_res, X, wn, [0.0, 0.0, rho0, k0])
+    if sol is None or abs(sol[0][3]) * FAR_RATIO <= 1.0:
+        return None
+    t = sol[0]
+    n = _chart(n0, u0, v0, t[0], t[1])
+    center = m + sc * (t[2] * n - n / t[3])
+    return _finish("sphere", {"center": center, "radius": float(sc / abs(t[3]))}, P, N, wn, _area(w))
+
+
+def _cross_section_seed(X, N, wn, a):
+    """Axis foot ``c`` (3,) in the plane through 0 normal to ``a`` where the projected normal
+    lines meet, or None."""
+    u, v = _frame(a)
+    B = np.c_[u, v]
+    N2 = N @ B
+    ln = np.linalg.norm(N2, axis=1)
+    ok = ln > 1e-6
+    if ok.sum() < 2:
+        return None
+    c2 = _nearest_to_lines((X @ B)[ok], N2[ok] / ln[ok, None], wn[ok])
+    return None if c2 is None else B @ c2
+
+
+def fit_cylinder(P, N, w=None) -> Surface | None:
+    """Geometric least-squares cylinder.
+
+    Seed: the axis is the least eigenvector of the normals' weighted scatter (a cylinder's
+    normals lie on a great circle), the axis point is where the normal lines meet in the cross
+    section. Then Levenberg-Marquardt on the true distances, the cross-section circle in
+    curvature form (regular as the radius grows without bound).
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points.
+    N : (p, 3) array_like
+        Unit normals at the points (required: they seed the axis).
+    w : (p,) array_like, optional
+        Non-negative weights.
+
+    Returns
+    -------
+    Surface or None
+        ``cylinder`` (``point`` = foot of the weighted centroid on the axis, unit ``axis``,
+        ``radius``) with weighted ``rms``, ``max_dev``, ``area``, ``outward``. ``None`` for fewer
+        than 5 points or a radius beyond FAR_RATIO data spreads (a plane).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t, z = np.meshgrid(np.linspace(0, 1, 10), np.linspace(0, 2, 5))
+    >>> U = np.c_[np.cos(t.ravel()), np.sin(t.ravel()), 0 * t.ravel()]
+    >>> s = fit_cylinder(3 * U + np.c_[0 * z.ravel(), 0 * z.ravel(), z.ravel()], -U)
+    >>> round(s.params["radius"], 9), np.round(np.abs(s.params["axis"]), 9), s.outward
+    (3.0, array([0., 0., 1.]), False)
+    """
+    P, N, wn = _check_inputs(P, N, w, True)
+    if len(P) < _MIN_POINTS["cylinder"]:
+        return None
+    m, sc = _normalise(P, wn)
+    X = (P - m) / sc
+    a0 = _least_eig((N * wn[:, None]).T @ N)[1]
+    c = _cross_section_seed(X, N, wn, a0)
+    r = math.nan if c is None else float(wn @ np.linalg.norm(_perp(X - c, a0), axis=1))
+    fallback = _unit(_perp(_pca_normal(X, wn)[None], a0)[0])
+    n0, rho0, k0 = _curvature_seed(c, r, fallback)
+    u0, v0 = _frame(a0)
+
+    def geometry(t):
+        a = _chart(a0, u0, v0, t[0], t[1])
+        u = _unit(n0 - (n0 @ a) * a)
+        return a, math.cos(t[2]) * u + math.sin(t[2]) * np.cross(a, u)
+
+    def make_res(Xa, sw):
+        def res(t):
+            a, n = geometry(t)
+            return sw * _curv_dist(_perp(Xa - t[3] * n, a), n, t[4])
+        return res
+
+    sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0])
+    if sol is None or abs(sol[0][4]) * FAR_RATIO <= 1.0:
+        return None
+    t = sol[0]
+    a, n = geometry(t)
+    foot = _perp((t[3] - 1.0 / t[4]) * n[None], a)[0]
+    params = {"point": m + sc * foot, "axis": a, "radius": float(sc / abs(t[4]))}
+    return _finish("cylinder", params, P, N, wn, _area(w))
+
+
+def _perp(X, a):
+    """Components of the rows of ``X`` normal to the unit vector ``a``."""
+    return X - np.outer(X @ a, a)
+
+
+def _cone_seed(X, N, wn, a0):
+    """Cone seed ``[0, 0, c1, c2, r0, psi]`` for the axis ``a0`` (None if the normals do not
+    meet in the cross section): the axis foot from the normal lines, then the weighted line
+    ``r = r0 + h tan(psi)`` through the (height, radius) pairs."""
+    c = _cross_section_seed(X, N, wn, a0)
+    if c is None:
+        return None
+    h = X @ a0
+    r = np.linalg.norm(_perp(X - c, a0), axis=1)
+    hm, rm = wn @ h, wn @ r
+    vh = wn @ (h - hm) ** 2
+    slope = (wn @ ((h - hm) * (r - rm))) / vh if vh > SEED_RCOND else 0.0
+    u0, v0 = _frame(a0)
+    return np.array([0.0, 0.0, c @ u0, c @ v0, rm - slope * hm, math.atan(slope)])
+
+
+def fit_cone(P, N, w=None) -> Surface | None:
+    """Geometric least-squares cone (one nappe).
+
+    Seeds: the axis is the normal of the plane fitted to the normal vectors (a cone's normals
+    lie on a small circle), and, for short arcs where that plane is ill-defined, the least
+    eigenvector of the normals' scatter (the cylinder seed); each is refined and the better
+    kept. The iterations minimise ``(r - r0) cos(psi) - h sin(psi)`` (distance to the
+    generatrix in the axis half-plane), regular at ``psi = 0`` (a cylinder).
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points.
+    N : (p, 3) array_like
+        Unit normals (required).
+    w : (p,) array_like, optional
+        Non-negative weights.
+
+    Returns
+    -------
+    Surface or None
+        ``cone`` (``apex``, unit ``axis`` from the apex into the opening, ``half_angle`` in
+        (0, pi/2)) with weighted ``rms``, ``max_dev``, ``area``, ``outward``. ``None`` for fewer
+        than 6 points, when the apex is beyond FAR_RATIO data spreads (a cylinder) or the
+        half-angle is within 1e-6 of pi/2 (a plane).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t, h = np.meshgrid(np.linspace(0, 6, 24), np.linspace(1, 2, 5))
+    >>> t, h = t.ravel(), h.ravel()
+    >>> P = np.c_[0.5 * h * np.cos(t), 0.5 * h * np.sin(t), h]       # apex 0, tan = 0.5
+    >>> N = np.c_[np.cos(t), np.sin(t), -0.5 * np.ones_like(t)] / np.sqrt(1.25)
+    >>> s = fit_cone(P, N)
+    >>> np.round(s.params["apex"], 9) + 0.0, round(math.tan(s.params["half_angle"]), 9)
+    (array([0., 0., 0.]), 0.5)
+    """
+    P, N, wn = _check_inputs(P, N, w, True)
+    if len(P) < _MIN_POINTS["cone"]:
+        return None
+    m, sc = _normalise(P, wn)
+    X = (P - m) / sc
+    Nc = N - wn @ N
+    axes = (_least_eig((Nc * wn[:, None]).T @ Nc)[1], _least_eig((N * wn[:, None]).T @ N)[1])
+    best = None
+    for a0 in axes:
+        x0 = _cone_seed(X, N, wn, a0)
+        sol = None if x0 is None else _run_lm(_cone_res(a0), X, wn, x0)
+        if sol is not None and (best is None or sol[1] < best[1][1]):
+            best = (a0, sol)
+    if best is None:
+        return None
+    a0, (t, _) = best
+    u0, v0 = _frame(a0)
+    a, c = _chart(a0, u0, v0, t[0], t[1]), t[2] * u0 + t[3] * v0
+    psi, r0 = t[5], t[4]
+    if abs(math.tan(psi)) * FAR_RATIO <= abs(r0) or math.cos(psi) < 1e-6:
+        return None
+    if psi < 0:
+        a, psi = -a, -psi
+    apex = c - (r0 / math.tan(psi)) * a
+    params = {"apex": m + sc * apex, "axis": a, "half_angle": float(psi)}
+    return _finish("cone", params, P, N, wn, _area(w))
+
+
+def _cone_res(a0):
+    u0, v0 = _frame(a0)
+
+    def make_res(Xa, sw):
+        def res(t):
+            a = _chart(a0, u0, v0, t[0], t[1])
+            x = Xa - (t[2] * u0 + t[3] * v0)
+            h = x @ a
+            r = np.linalg.norm(x - np.outer(h, a), axis=1)
+            return sw * ((r - t[4]) * math.cos(t[5]) - h * math.sin(t[5]))
+        return res
+
+    return make_res
+
+
+def _revolution_axis(X, N, wn):
+    """Unit axis and a point on it of the line meeting all normal lines (least squares in
+    Pluecker coordinates: ``a . (x_i x n_i) + n_i . m = 0``, ``|a| = 1``)."""
+    G = np.c_[np.cross(X, N), N]
+    M = (G * wn[:, None]).T @ G
+    A, B, C = M[:3, :3], M[:3, 3:], M[3:, 3:]
+    Cp = np.linalg.pinv(C, rcond=SEED_RCOND, hermitian=True)
+    a = _least_eig(A - B @ Cp @ B.T)[1]
+    mom = -Cp @ B.T @ a
+    return a, np.cross(a, mom)
+
+
+def fit_torus(P, N, w=None) -> Surface | None:
+    """Geometric least-squares torus.
+
+    Seed: the axis is the line meeting all normal lines (each normal line of a surface of
+    revolution meets its axis), the tube circle is where the normal lines meet in the
+    (radius, height) half-plane. Then Levenberg-Marquardt on
+    ``hypot(r - major, h - h0) - minor``.
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points.
+    N : (p, 3) array_like
+        Unit normals (required).
+    w : (p,) array_like, optional
+        Non-negative weights.
+
+    Returns
+    -------
+    Surface or None
+        ``torus`` (``center``, unit ``axis``, ``major_radius``, ``minor_radius``) with weighted
+        ``rms``, ``max_dev``, ``area``, ``outward``. ``None`` for fewer than 7 points, a major
+        radius beyond FAR_RATIO data spreads (a cylinder) or below TORUS_MIN_MAJOR of the
+        minor one (a sphere).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u, v = np.meshgrid(np.linspace(0, 6, 30), np.linspace(0, 6, 12))
+    >>> u, v = u.ravel(), v.ravel()
+    >>> Nt = np.c_[np.cos(v) * np.cos(u), np.cos(v) * np.sin(u), np.sin(v)]
+    >>> C = np.c_[3 * np.cos(u), 3 * np.sin(u), 0 * u]
+    >>> s = fit_torus(C + Nt, Nt)
+    >>> round(s.params["major_radius"], 9), round(s.params["minor_radius"], 9), s.outward
+    (3.0, 1.0, True)
+    """
+    P, N, wn = _check_inputs(P, N, w, True)
+    if len(P) < _MIN_POINTS["torus"]:
+        return None
+    m, sc = _normalise(P, wn)
+    X = (P - m) / sc
+    a0, q = _revolution_axis(X, N, wn)
+    x0 = _torus_seed(X, N, wn, a0, q)
+    if x0 is None:
+        return None
+    sol = _run_lm(_torus_res(a0), X, wn, x0)
+    if sol is None:
+        return None
+    t = sol[0]
+    u0, v0 = _frame(a0)
+    a = _chart(a0, u0, v0, t[0], t[1])
+    R, r = float(t[5]), abs(float(t[6]))
+    if not (TORUS_MIN_MAJOR * r < R < FAR_RATIO) or r == 0:
+        return None
+    center = t[2] * u0 + t[3] * v0 + t[4] * a
+    params = {"center": m + sc * center, "axis": a, "major_radius": sc * R,
+              "minor_radius": sc * r}
+    return _finish("torus", params, P, N, wn, _area(w))
+
+
+def _torus_seed(X, N, wn, a0, q):
+    """Torus seed ``[0, 0, c1, c2, h0, R, r]`` from the axis ``(a0, q)``, or None."""
+    u0, v0 = _frame(a0)
+    c = q - (q @ a0) * a0
+    x = X - c
+    h = x @ a0
+    Rv = x - np.outer(h, a0)
+    rho = np.linalg.norm(Rv, axis=1)
+    U = Rv / np.maximum(rho, 1e-300)[:, None]
+    D = np.c_[np.einsum("ij,ij->i", N, U), N @ a0]
+    ln = np.linalg.norm(D, axis=1)
+    ok = ln > 1e-6
+    if ok.sum() < 2:
+        return None
+    Y = np.c_[rho, h]
+    tube = _nearest_to_lines(Y[ok], D[ok] / ln[ok, None], wn[ok])
+    if tube is None:
+        return None
+    r = float(wn @ np.linalg.norm(Y - tube, axis=1))
+    return np.array([0.0, 0.0, c @ u0, c @ v0, tube[1], tube[0], r])
+
+
+def _torus_res(a0):
+    u0, v0 = _frame(a0)
+
+    def make_res(Xa, sw):
+        def res(t):
+            a = _chart(a0, u0, v0, t[0], t[1])
+            x = Xa - (t[2] * u0 + t[3] * v0)
+            h = x @ a
+            rho = np.linalg.norm(x - np.outer(h, a), axis=1)
+            return sw * (np.hypot(rho - t[5], h - t[4]) - t[6])
+        return res
+
+    return make_res

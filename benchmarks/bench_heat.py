@@ -15,7 +15,7 @@ Part 1 (one mesh, one process):
   Dirichlet problem, and one solve.
 * **exact** -- ``segment_mesh`` with the exact reference solver (``HeatSolver``: one libigl
   factorization, one solve per group).
-* **fast** -- ``segment_mesh`` with :class:`igl_heatseg.fastheat.FastHeatSolver`.
+* **fast** -- ``segment_mesh`` with :class:`igl_heatseg.heat.fast.FastHeatSolver`.
 * **end to end** -- ``igl-heatseg segment MESH -o DIR`` in a fresh interpreter.
 * **whole-mesh floor** -- the issue's own floor: CHOLMOD of the whole mesh's (regularised)
   Laplacian, all vertices unknown; larger than the free-block floor above.
@@ -54,8 +54,8 @@ def _segment(mesh, solver: str):
     if "solver" in inspect.signature(S.segment_mesh).parameters:
         return S.segment_mesh(mesh, solver=solver, keep_solvers=False)
     # segment.py without the solver switch: swap the class it uses.
-    from igl_heatseg.fastheat import FastHeatSolver
-    from igl_heatseg.heat import HeatSolver
+    from igl_heatseg.heat.fast import FastHeatSolver
+    from igl_heatseg.heat.exact import HeatSolver
 
     saved = S.HeatSolver
     S.HeatSolver = FastHeatSolver if solver == "fast" else HeatSolver
@@ -84,7 +84,7 @@ def floor_time(mesh) -> dict:
     import igl
     import scipy.sparse as sp
 
-    from igl_heatseg.seeds import seed_groups, seed_mask
+    from igl_heatseg.segmentation.seeds import seed_groups, seed_mask
 
     mask = seed_mask(mesh.V, mesh.F)
     k, group = seed_groups(mesh.F, mask)
@@ -154,8 +154,8 @@ def agreement(area: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 def part1(path: Path, skip_exact: bool, repeat: int = 1) -> dict:
-    from igl_heatseg.io import load_mesh
-    from igl_heatseg.segment import face_areas
+    from igl_heatseg.io.meshes import load_mesh
+    from igl_heatseg.segmentation.paper import face_areas
 
     t = time.perf_counter()
     mesh = load_mesh(path)
@@ -217,7 +217,7 @@ def peak_rss_gb() -> float:
 
 def one_size(path: Path) -> dict:
     """Run in a subprocess: load + fast segmentation; times and peak memory."""
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     t0 = time.perf_counter()
     mesh = load_mesh(path)

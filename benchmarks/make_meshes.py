@@ -34,7 +34,7 @@ def make_noisy(
     m0: int, levels: int, noise: float = NOISE, seed: int = SEED
 ) -> tuple[np.ndarray, np.ndarray]:
     """Return ``V (n,3) float64, F (m,3) int64`` of a noisy remeshed iron."""
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     mesh = load_mesh(IRON)
     V, F = mesh.V, mesh.F

@@ -10,15 +10,15 @@ Meshes (all with ground truth):
 Each mesh is used clean and with Gaussian noise along the vertex normals of standard deviation
 ``0.05`` and ``0.1`` times the mean edge length (``--noise``; fixed seed per mesh).
 
-Methods: ``paper`` (:func:`igl_heatseg.segment.segment_mesh`, defaults theta = pi/20,
-eps = 0.05), ``robust`` (:func:`igl_heatseg.robust.segment_robust`, when that module exists),
+Methods: ``paper`` (:func:`igl_heatseg.segmentation.paper.segment_mesh`, defaults theta = pi/20,
+eps = 0.05), ``robust`` (:func:`igl_heatseg.segmentation.robust.segment_robust`, when that module exists),
 ``dihedral`` (pure dihedral region growing), ``randomwalks`` (Lai et al. 2008 with the paper's
 seeds), ``xatlas`` (xatlas charts).
 
 Columns: faces, true segments (mean over truths), segments, area-weighted purity, coverage and
-Rand index (:mod:`igl_heatseg.evaluate`), with ``--psb`` also the PSB cut discrepancy, Hamming
+Rand index (:mod:`igl_heatseg.evaluation.metrics`), with ``--psb`` also the PSB cut discrepancy, Hamming
 distance, 1 - Rand index, GCE and LCE; ``bij``: share of charts (face-connected pieces of the
-segments, cut to disks automatically) whose Hessian eigenmap (:mod:`igl_heatseg.param`, no
+segments, cut to disks automatically) whose Hessian eigenmap (:mod:`igl_heatseg.parameterization.param`, no
 fallback) passes the bijectivity certificate -- computed only when there are at most
 ``--max-charts`` charts ("-" otherwise); seconds of the segmentation call.
 
@@ -45,8 +45,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 
-from igl_heatseg.checks import validate_mesh  # noqa: E402
-from igl_heatseg.evaluate import evaluate_labels, read_truth  # noqa: E402
+from igl_heatseg.mesh.checks import validate_mesh  # noqa: E402
+from igl_heatseg.evaluation.metrics import evaluate_labels, read_truth  # noqa: E402
 
 #: Where the shared test meshes live (``--data`` overrides).
 DATA_DEFAULT = ROOT.parent / "shared" / "data" / "mechanical"
@@ -81,7 +81,7 @@ def labelled_meshes(
     irregular: float = 0.0,
 ) -> Iterator[tuple[str, np.ndarray, np.ndarray, list]]:
     """Yield ``(name, V, F, truths)`` for every labelled mesh (clean)."""
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     if "abc" in kinds:
         for name in ABC:
@@ -116,22 +116,22 @@ def available_methods(names=METHODS_ALL) -> dict[str, Callable]:
     out: dict[str, Callable] = {}
     for name in names:
         if name == "paper":
-            from igl_heatseg.segment import segment_mesh
+            from igl_heatseg.segmentation.paper import segment_mesh
 
             out[name] = lambda mesh: segment_mesh(mesh, keep_solvers=False).labels
         elif name == "robust":
             try:
-                from igl_heatseg.robust import segment_robust
+                from igl_heatseg.segmentation.robust import segment_robust
             except ImportError:
-                log.warning("igl_heatseg.robust not found: no robust row")
+                log.warning("igl_heatseg.segmentation.robust not found: no robust row")
                 continue
             out[name] = lambda mesh: segment_robust(mesh).labels
         elif name == "dihedral":
-            from igl_heatseg.baselines import dihedral_region_growing
+            from igl_heatseg.segmentation.baselines import dihedral_region_growing
 
             out[name] = lambda mesh: dihedral_region_growing(mesh.V, mesh.F)
         elif name == "randomwalks":
-            from igl_heatseg.baselines import random_walks
+            from igl_heatseg.segmentation.baselines import random_walks
 
             out[name] = lambda mesh: random_walks(mesh.V, mesh.F)
         elif name == "xatlas":
@@ -140,7 +140,7 @@ def available_methods(names=METHODS_ALL) -> dict[str, Callable]:
             except ImportError:
                 log.warning("xatlas not installed: no xatlas row")
                 continue
-            from igl_heatseg.baselines import xatlas_charts
+            from igl_heatseg.segmentation.baselines import xatlas_charts
 
             out[name] = lambda mesh: xatlas_charts(mesh.V, mesh.F)
         else:
@@ -156,11 +156,11 @@ def bijective_share(V: np.ndarray, F: np.ndarray, labels: np.ndarray, max_charts
     Returns
     -------
     share : float
-        ``nan`` when there are more than ``max_charts`` charts or ``igl_heatseg.param`` is
+        ``nan`` when there are more than ``max_charts`` charts or ``igl_heatseg.parameterization.param`` is
         missing.
     n_charts : int
     """
-    from igl_heatseg.topology import face_components
+    from igl_heatseg.mesh.topology import face_components
 
     pieces = []
     for s in np.unique(labels):
@@ -170,8 +170,8 @@ def bijective_share(V: np.ndarray, F: np.ndarray, labels: np.ndarray, max_charts
     if len(pieces) > max_charts:
         return math.nan, len(pieces)
     try:
-        from igl_heatseg.cut import cut_to_disk
-        from igl_heatseg.param import parameterize_chart
+        from igl_heatseg.parameterization.cut import cut_to_disk
+        from igl_heatseg.parameterization.param import parameterize_chart
     except ImportError:
         return math.nan, len(pieces)
     good = 0

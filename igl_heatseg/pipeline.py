@@ -1,18 +1,20 @@
-"""The whole pipeline: segment, cut every chart to a disk, parameterize, pack, write.
+"""The whole pipeline: segment, cut every chart to a disk, parameterize, pack.
 
-``igl-heatseg run MESH -o DIR`` (:func:`register`) and :func:`run_pipeline` do
+:func:`run_pipeline` (behind ``igl-heatseg run MESH -o DIR``) does
 
-1. :func:`igl_heatseg.segment.segment_with_mode` (the paper's §3.1-3.4, or robust mode);
+1. :func:`igl_heatseg.segmentation.paper.segment_with_mode` (the paper's §3.1-3.4, or robust mode);
 2. one chart per face-connected piece of each segment; user cut paths (paper §3.5: the ends of
    a generatrix, vertex ids of the *input* mesh) are assigned to the chart holding both ends
-   and cut with :func:`igl_heatseg.cut.cut_along_paths`; with ``cut="auto"`` every chart that
-   is still not a disk is cut by :func:`igl_heatseg.cut.cut_to_disk`;
-3. :func:`igl_heatseg.param.parameterize_chart` (Hessian eigenmap, certified, with fallback);
-4. :func:`igl_heatseg.atlas.pack_charts` (areas follow the 3D areas);
-5. writes everything ``segment`` writes plus ``charts/chart_000.obj`` ... (3D positions of the
-   cut chart, ``vt`` = the chart's own UV in the units of the mesh), ``atlas.obj`` (the cleaned
-   input mesh in input face order with per-corner UVs packed in ``[0, 1]^2``) and a ``charts``
-   list in ``report.json``.
+   and cut with :func:`igl_heatseg.parameterization.cut.cut_along_paths`; with ``cut="auto"`` every chart that
+   is still not a disk is cut by :func:`igl_heatseg.parameterization.cut.cut_to_disk`;
+3. :func:`igl_heatseg.parameterization.param.parameterize_chart` (Hessian eigenmap, certified, with fallback);
+4. :func:`igl_heatseg.parameterization.atlas.pack_charts` (areas follow the 3D areas);
+and returns a :class:`PipelineResult`. Writing it is the caller's step:
+:func:`igl_heatseg.io.results.write_run` writes everything ``segment`` writes plus
+``charts/chart_000.obj`` ... (3D positions of the cut chart, ``vt`` = the chart's own UV in the
+units of the mesh), ``atlas.obj`` (the cleaned input mesh in input face order with per-corner
+UVs packed in ``[0, 1]^2``) and a ``charts`` list in ``report.json``; pictures come from
+:func:`igl_heatseg.viz.write_run_pictures`.
 
 A chart that is not a disk with ``cut="none"`` (and no user path making it one) is not
 parameterized: its report entry says so (``"parameterized": false``) and its corners get UV
@@ -21,25 +23,25 @@ parameterized: its report entry says so (``"parameterized": false``) and its cor
 
 from __future__ import annotations
 
-import argparse
 import logging
-import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Literal, Sequence
 
 import numpy as np
 
-from .atlas import atlas_corner_uv, pack_charts, write_atlas_obj, write_chart_obj
-from .checks import CleanMesh
-from .constants import EPS_DEFAULT, THETA_DEFAULT
-from .cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
+from .parameterization import param as param_mod
+from .parameterization.atlas import atlas_corner_uv, pack_charts
+from .parameterization.param import parameterize_chart
+from .mesh.checks import CleanMesh
+from .parameterization.cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
 from .errors import MeshError
-from .segment import face_areas
-from .topology import face_components
+from .segmentation.api import segment_with_mode
+from .segmentation.paper import face_areas
+from .segmentation.params import resolve_params
+from .mesh.topology import face_components
 
-__all__ = ["Chart", "PipelineResult", "run_pipeline", "register", "parse_cut_path"]
+__all__ = ["Chart", "PipelineResult", "run_pipeline"]
 
 log = logging.getLogger(__name__)
 
@@ -102,25 +104,6 @@ def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
     a = UV[F[:, 1]] - UV[F[:, 0]]
     b = UV[F[:, 2]] - UV[F[:, 0]]
     return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
-
-
-def parse_cut_path(text: str) -> tuple[int, int]:
-    """Parse ``"V0:V1"`` (two input vertex ids) for ``--cut-path``.
-
-    Raises
-    ------
-    argparse.ArgumentTypeError
-    """
-    parts = text.split(":")
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        v0, v1 = int(parts[0]), int(parts[1])
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"cut path must be V0:V1 (two vertex ids), got {text!r}"
-        ) from None
-    return v0, v1
 
 
 def _check_cut_paths(mesh: CleanMesh, cut_paths: Sequence[tuple[int, int]]) -> None:
@@ -190,9 +173,8 @@ def _compose(first: CutResult, second: CutResult) -> CutResult:
 
 def run_pipeline(
     mesh: CleanMesh,
-    out_dir: str | Path | None = None,
-    theta: float | None = THETA_DEFAULT,
-    eps: float | None = EPS_DEFAULT,
+    theta: float | None = None,
+    eps: float | None = None,
     energy: Literal["auto", "hlle", "curved"] = "auto",
     cut: Literal["auto", "none"] = "auto",
     cut_paths: Sequence[tuple[int, int]] = (),
@@ -200,25 +182,20 @@ def run_pipeline(
     fallback: str = "tutte+slim",
     gutter: float | None = None,
     progress=None,
-    extra: dict | None = None,
-    t_start: float | None = None,
-    pictures: bool = False,
     solver: str = "fast",
     mode: str = "paper",
     hlle_skip_curvature: float | None | Literal["default"] = "default",
 ) -> PipelineResult:
-    """Segment, cut, parameterize, pack and (optionally) write a mesh.
+    """Segment, cut, parameterize and pack a mesh (nothing is written; see the module docstring).
 
     Parameters
     ----------
     mesh : CleanMesh
-        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.checks.validate_mesh`.
-    out_dir : str or Path, optional
-        Where to write (see the module docstring); nothing is written when ``None``.
-    theta, eps : float
-        Segmentation parameters (paper Table 1 defaults).
+        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.mesh.validate_mesh`.
+    theta, eps : float, optional
+        Segmentation parameters; ``None`` takes the mode's defaults (paper: Table 1).
     energy : {"auto", "hlle", "curved"}
-        Hessian energy for :func:`igl_heatseg.param.parameterize_chart`: the paper's HLLE,
+        Hessian energy for :func:`igl_heatseg.parameterization.param.parameterize_chart`: the paper's HLLE,
         libigl's curved Hessian, or ``"auto"`` (default): HLLE, and the curved Hessian for
         charts whose HLLE map is not bijective (measured: the fewest fallbacks on every
         mesh of the shared data set).
@@ -230,25 +207,16 @@ def run_pipeline(
     fallback : str
         Passed to ``parameterize_chart``.
     gutter : float, optional
-        Atlas gutter (default :data:`igl_heatseg.atlas.GUTTER_DEFAULT`).
+        Atlas gutter (default :data:`igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`).
     progress : callable(stage, fraction), optional
-    extra : dict, optional
-        More entries for ``report.json``.
-    t_start : float, optional
-        ``time.perf_counter()`` at the start of the job (for ``timings["total"]``).
-    pictures : bool
-        Also write ``segmentation.png`` and ``checker.png`` into ``out_dir``
-        (:func:`igl_heatseg.viz.write_run_pictures`; skipped with a warning when polyscope or
-        an OpenGL context is missing).
     solver : {"fast", "exact"}
-        Heat solver for the segmentation (see :func:`igl_heatseg.segment.segment_mesh`).
+        Heat solver for the segmentation (see :func:`igl_heatseg.segmentation.paper.segment_mesh`).
     mode : {"paper", "robust"}
-        Segmentation mode (:func:`igl_heatseg.segment.segment_with_mode`); ``theta``/``eps``
-        ``None`` take the mode's defaults.
+        Segmentation mode (:func:`igl_heatseg.segmentation.segment_with_mode`).
     hlle_skip_curvature : float, None or "default"
         With ``energy="auto"``, charts whose total absolute Gaussian curvature exceeds this
         skip HLLE (recorded in each chart's ``attempts``); ``"default"``:
-        :data:`igl_heatseg.param.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
+        :data:`igl_heatseg.parameterization.param.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
 
     Returns
     -------
@@ -258,11 +226,15 @@ def run_pipeline(
     ------
     MeshError
         Bad parameters or cut-path vertex ids (named).
-    """
-    from . import param as param_mod
-    from .param import parameterize_chart
-    from .segment import segment_with_mode
 
+    Examples
+    --------
+    >>> import igl, igl_heatseg as ih
+    >>> V, F = igl.icosahedron()
+    >>> res = ih.run(ih.validate_mesh(*igl.loop(V, F, 2)))
+    >>> res.report["parameterization"]["charts_bijective"], res.segmentation.num_segments
+    (1, 1)
+    """
     if isinstance(hlle_skip_curvature, str) and hlle_skip_curvature == "default":
         hlle_skip_curvature = param_mod.HLLE_SKIP_CURVATURE
 
@@ -270,7 +242,8 @@ def run_pipeline(
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
     if energy not in ("auto", "hlle", "curved"):
         raise MeshError(f"`energy` must be 'auto', 'hlle' or 'curved', got {energy!r}")
-    t0 = time.perf_counter() if t_start is None else t_start
+    resolve_params(mode, theta, eps)  # before the (long) segmentation
+    t0 = time.perf_counter()
     _check_cut_paths(mesh, cut_paths)  # before the (long) segmentation
     progress = progress or (lambda stage, fraction=1.0: None)
     seg = segment_with_mode(mesh, mode, theta, eps, progress=progress, solver=solver)
@@ -443,38 +416,9 @@ def run_pipeline(
         "atlas_fill": float(atlas.fill) if atlas is not None else 0.0,
     }
     report = {"charts": [ch.report for ch in charts], "parameterization": summary}
-    report.update(extra or {})
-    timings = dict(report.pop("timings", {}))
-    timings.update(charts=t_charts, cut=t_cut, param=t_param, pack=t_pack)
-    report["timings"] = timings
-
-    if out_dir is not None:
-        from .cli import write_segmentation
-
-        out = Path(out_dir)
-        t = time.perf_counter()
-        (out / "charts").mkdir(parents=True, exist_ok=True)
-        for ch in charts:
-            if ch.param is not None:
-                write_chart_obj(
-                    out / "charts" / f"chart_{ch.id:03d}.obj", ch.cut.V, ch.cut.F, ch.param.UV
-                )
-        write_atlas_obj(out / "atlas.obj", V, F, corner_uv)
-        report["timings"]["write_charts"] = time.perf_counter() - t
-        if pictures:
-            t = time.perf_counter()
-            try:
-                from .viz import write_run_pictures
-
-                written = write_run_pictures(out, mesh, seg, charts)
-            except ImportError as exc:  # viz needs the `viz` extra
-                log.warning("no pictures: %s", exc)
-                written = {}
-            report["pictures"] = sorted(p.name for p in written.values())
-            report["timings"]["pictures"] = time.perf_counter() - t
-        report = write_segmentation(out, mesh, seg, report, t_start=t0)
-    else:
-        report["timings"]["total"] = time.perf_counter() - t0
+    report["timings"] = dict(
+        charts=t_charts, cut=t_cut, param=t_param, pack=t_pack, total=time.perf_counter() - t0
+    )
     return PipelineResult(
         mesh=mesh,
         segmentation=seg,
@@ -483,104 +427,3 @@ def run_pipeline(
         atlas=atlas,
         report=report,
     )
-
-
-def _cmd_run(args: argparse.Namespace) -> int:
-    from .cli import PROGRESS_MIN_FACES, Progress
-    from .io import load_mesh
-
-    t0 = time.perf_counter()
-    progress = Progress(enabled=args.progress == "always")
-    mesh = load_mesh(args.mesh)
-    t_load = time.perf_counter() - t0
-    if args.progress == "auto":
-        progress.enabled = mesh.F.shape[0] >= PROGRESS_MIN_FACES
-    res = run_pipeline(
-        mesh,
-        args.out,
-        theta=args.theta,
-        eps=args.eps,
-        solver=args.solver,
-        mode=args.mode,
-        energy=args.energy,
-        cut=args.cut,
-        cut_paths=args.cut_path or [],
-        progress=progress,
-        extra={"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}},
-        t_start=t0,
-        pictures=args.pictures,
-    )
-    s = res.report["parameterization"]
-    sys.stderr.write(
-        f"{Path(args.mesh).name}: {res.segmentation.num_segments} segments, "
-        f"{s['charts_total']} charts ({s['charts_cut']} cut), {s['charts_bijective']} bijective, "
-        f"{s['charts_fallback']} via fallback, in {res.report['timings']['total']:.2f} s; "
-        f"wrote {args.out}/\n"
-    )
-    if s["charts_bijective"] < s["charts_total"]:
-        sys.stderr.write(
-            f"igl-heatseg: warning: {s['charts_total'] - s['charts_bijective']} chart(s) without "
-            "a bijective map (see report.json `charts`)\n"
-        )
-    return 0
-
-
-def register(subparsers) -> None:
-    """Add ``igl-heatseg run MESH -o DIR [--theta] [--eps] [--energy] [--cut] [--cut-path] ...``.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        From ``parser.add_subparsers()``; the subcommand sets ``func`` (``args -> int``).
-        Exit code 0 (a chart without a bijective map is reported in report.json and warned
-        about on stderr).
-    """
-    from .cli import PROGRESS_MIN_FACES, add_segment_arguments, add_solver_argument
-
-    p = subparsers.add_parser(
-        "run",
-        help="segment, cut to disks, parameterize and pack a mesh",
-        description="Segment MESH, cut every chart to a disk, map it to the plane (Hessian "
-        "eigenmap with a certified-bijective fallback), pack an atlas and write everything "
-        "`segment` writes plus charts/chart_NNN.obj, atlas.obj and a `charts` list in "
-        "report.json.",
-    )
-    p.add_argument("mesh", help="input mesh file")
-    p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
-    add_segment_arguments(p, with_mode=True)
-    add_solver_argument(p)
-    p.add_argument(
-        "--energy",
-        choices=("auto", "hlle", "curved"),
-        default="auto",
-        help="Hessian energy: the paper's HLLE, libigl's curved Hessian, or auto (default): "
-        "HLLE, then the curved Hessian where HLLE's map is not bijective",
-    )
-    p.add_argument(
-        "--cut",
-        choices=("auto", "none"),
-        default="auto",
-        help="cut charts that are not disks automatically (default), or only along --cut-path",
-    )
-    p.add_argument(
-        "--cut-path",
-        type=parse_cut_path,
-        action="append",
-        metavar="V0:V1",
-        help="cut the chart holding input vertices V0 and V1 along the shortest path between "
-        "them (the ends of a generatrix, paper §3.5); repeatable",
-    )
-    p.add_argument(
-        "--no-pictures",
-        dest="pictures",
-        action="store_false",
-        help="do not render segmentation.png and checker.png (rendered by default when the "
-        "`viz` extra and an OpenGL/EGL library are available; skipped with a warning otherwise)",
-    )
-    p.add_argument(
-        "--progress",
-        choices=("auto", "always", "never"),
-        default="auto",
-        help=f"progress on stderr (auto: for meshes of {PROGRESS_MIN_FACES}+ faces)",
-    )
-    p.set_defaults(func=_cmd_run)

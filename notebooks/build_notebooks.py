@@ -28,9 +28,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from IPython.display import Image, display
 
-from igl_heatseg import viz, plots
-from igl_heatseg.io import load_mesh
-from igl_heatseg.segment import segment_mesh
+import igl_heatseg as ih
+from igl_heatseg import viz
+from igl_heatseg.viz import plots
 
 
 def find_root():
@@ -72,7 +72,7 @@ NB1 = [
     new_code_cell(SETUP),
     new_markdown_cell("## 1. Load and validate"),
     new_code_cell(
-        'mesh = load_mesh(DATA / "fandisk.off")\n'
+        'mesh = ih.load_mesh(DATA / "fandisk.off")\n'
         "V, F = mesh.V, mesh.F\n"
         'print(f"{mesh.name}: {len(V)} vertices, {len(F)} faces")'
     ),
@@ -83,9 +83,9 @@ NB1 = [
         "connected through non-sharp edges form a group."
     ),
     new_code_cell(
-        "from igl_heatseg.seeds import dihedral_deviation\n"
+        "from igl_heatseg.segmentation.seeds import dihedral_deviation\n"
         "E, phi = dihedral_deviation(V, F)\n"
-        "seg = segment_mesh(mesh)\n"
+        "seg = ih.segment_mesh(mesh)\n"
         "fig, ax = plt.subplots(figsize=(6, 3))\n"
         "ax.hist(np.degrees(phi[np.isfinite(phi)]), bins=90, log=True)\n"
         'ax.axvline(np.degrees(seg.theta), color="r", ls="--", label="theta")\n'
@@ -128,13 +128,12 @@ NB1 = [
     ),
     new_markdown_cell(
         "## 6. Charts: cut to disks, Hessian parameterization, certificate (Figs. 14, 15)\n\n"
-        "`run_pipeline` cuts every chart that is not a topological disk and maps it to the "
+        "`ih.run` cuts every chart that is not a topological disk and maps it to the "
         "plane; each map is certified (no flipped triangle, no boundary self-intersection)."
     ),
     new_code_cell(
-        "from igl_heatseg.pipeline import run_pipeline\n"
-        "t = time.perf_counter()\n"
-        "res = run_pipeline(mesh, None)\n"
+                "t = time.perf_counter()\n"
+        "res = ih.run(mesh)\n"
         'print(f"pipeline: {time.perf_counter() - t:.1f} s")\n'
         "print(f\"{'chart':>5} {'seg':>4} {'faces':>6} {'cut':>12} {'method':>14} \"\n"
         "      f\"{'bijective':>9}\")\n"
@@ -149,7 +148,7 @@ NB1 = [
         "plt.show()"
     ),
     new_markdown_cell(
-        "Interactive use: `viz.view(DATA / 'fandisk.off', 'final')` opens polyscope's window "
+        "Interactive use: `igl-heatseg view data/fandisk.off --stage final` opens polyscope's window "
         "with every stage a click away (`igl-heatseg view data/fandisk.off --stage seeds`)."
     ),
 ]
@@ -175,9 +174,9 @@ NB2 = [
         'MESHES = ["fandisk.off", "block.ply", "abc_00007974_5.ply", "psb_358_bearing.ply"]\n'
         "rows = []\n"
         "for name in MESHES:\n"
-        "    mesh = load_mesh(DATA / name)\n"
+        "    mesh = ih.load_mesh(DATA / name)\n"
         "    t = time.perf_counter()\n"
-        "    seg = segment_mesh(mesh, keep_solvers=False)\n"
+        "    seg = ih.segment(mesh)\n"
         "    rows.append((name, len(mesh.F), seg.initial_groups, seg.num_segments,\n"
         "                 time.perf_counter() - t))\n"
         "print(f\"{'mesh':<22}{'faces':>7}{'initial':>9}{'final':>7}{'seconds':>9}\")\n"
@@ -189,12 +188,11 @@ NB2 = [
         "fallback when needed)"
     ),
     new_code_cell(
-        "from igl_heatseg.pipeline import run_pipeline\n"
-        "summary = []\n"
+                "summary = []\n"
         'for name in ["fandisk.off", "block.ply"]:\n'
-        "    mesh = load_mesh(DATA / name)\n"
+        "    mesh = ih.load_mesh(DATA / name)\n"
         "    t = time.perf_counter()\n"
-        "    res = run_pipeline(mesh, None)\n"
+        "    res = ih.run(mesh)\n"
         '    s = res.report["parameterization"]\n'
         '    summary.append((name, s["charts_total"], s["charts_cut"], s["charts_bijective"],\n'
         '                    s["charts_fallback"], time.perf_counter() - t))\n'
@@ -223,8 +221,8 @@ NB2 = [
         "global scaling), symmetric Dirichlet (4 = isometric)."
     ),
     new_code_cell(
-        "from igl_heatseg.compare import compare_param, format_table\n"
-        'rows = compare_param(load_mesh(DATA / "fandisk.off"),\n'
+        "from igl_heatseg.evaluation.compare import compare_param, format_table\n"
+        'rows = compare_param(ih.load_mesh(DATA / "fandisk.off"),\n'
         '                     methods=("hessian-hlle", "harmonic", "lscm"))\n'
         "print(format_table(rows))"
     ),
@@ -250,7 +248,7 @@ NB3 = [
     ),
     new_code_cell(SETUP),
     new_code_cell(
-        'MESHES = {name: load_mesh(DATA / name) for name in ["fandisk.off", "block.ply"]}\n'
+        'MESHES = {name: ih.load_mesh(DATA / name) for name in ["fandisk.off", "block.ply"]}\n'
         "THETAS = np.pi / np.array([60, 40, 30, 20, 15, 10, 6])\n"
         "EPSS = [0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.4]"
     ),
@@ -258,7 +256,7 @@ NB3 = [
     new_code_cell(
         "fig, ax = plt.subplots(1, 2, figsize=(11, 3.5))\n"
         "for name, mesh in MESHES.items():\n"
-        "    counts = [segment_mesh(mesh, th, 0.05, keep_solvers=False) for th in THETAS]\n"
+        "    counts = [ih.segment(mesh, theta=th, eps=0.05) for th in THETAS]\n"
         "    ax[0].plot(np.degrees(THETAS), [s.num_segments for s in counts], 'o-', label=name)\n"
         "    ax[1].plot(np.degrees(THETAS), [s.initial_groups for s in counts], 'o-', label=name)\n"
         '    print(name, "segments:", [s.num_segments for s in counts],\n'
@@ -272,7 +270,7 @@ NB3 = [
     new_code_cell(
         "fig, ax = plt.subplots(figsize=(6, 3.5))\n"
         "for name, mesh in MESHES.items():\n"
-        "    counts = [segment_mesh(mesh, np.pi / 20, e, keep_solvers=False).num_segments\n"
+        "    counts = [ih.segment(mesh, theta=np.pi / 20, eps=e).num_segments\n"
         "              for e in EPSS]\n"
         "    ax.plot(EPSS, counts, 'o-', label=name)\n"
         "    print(name, dict(zip(EPSS, counts)))\n"
@@ -286,11 +284,10 @@ NB3 = [
         "construction). Below: segments, charts, bijective Hessian maps, fallbacks."
     ),
     new_code_cell(
-        "from igl_heatseg.pipeline import run_pipeline\n"
-        'mesh = MESHES["block.ply"]\n'
+                'mesh = MESHES["block.ply"]\n'
         "res_rows = []\n"
         "for th in np.pi / np.array([30, 20, 10]):\n"
-        "    s = run_pipeline(mesh, None, th, 0.05).report['parameterization']\n"
+        "    s = ih.run(mesh, th, 0.05).report['parameterization']\n"
         "    res_rows.append((np.degrees(th), s['charts_total'], s['charts_bijective'],\n"
         "                     s['charts_fallback']))\n"
         "print(f\"{'theta':>6}{'charts':>8}{'bijective':>10}{'fallback':>9}\")\n"

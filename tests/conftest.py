@@ -17,6 +17,6 @@ def data_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def fandisk():
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     return load_mesh(DATA / "fandisk.off")

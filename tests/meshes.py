@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from igl_heatseg.checks import validate_mesh
+from igl_heatseg.mesh.checks import validate_mesh
 
 
 def grid(nx: int, ny: int, sx: float = 1.0, sy: float = 1.0):

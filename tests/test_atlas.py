@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.atlas: packing charts into [0,1]^2 and OBJ writers."""
+"""Tests for igl_heatseg.parameterization.atlas: packing charts into [0,1]^2 and OBJ writers."""
 
 from __future__ import annotations
 
@@ -6,15 +6,14 @@ import igl
 import numpy as np
 import pytest
 
-from igl_heatseg.atlas import (
+from igl_heatseg.io.results import write_atlas_obj, write_chart_obj
+from igl_heatseg.parameterization.atlas import (
     atlas_corner_uv,
     boxes_overlap,
     min_area_rotation,
     pack_charts,
-    write_atlas_obj,
-    write_chart_obj,
 )
-from igl_heatseg.cut import cut_to_disk
+from igl_heatseg.parameterization.cut import cut_to_disk
 from igl_heatseg.errors import MeshError
 
 #: Exactness of coordinates re-read from OBJ files written with 17 significant digits.
@@ -131,7 +130,7 @@ def _hull_reference(P):
 
 @pytest.mark.parametrize("kind", ["normal", "anisotropic", "circle", "lattice"])
 def test_filtered_hull_equals_the_full_monotone_chain(kind):
-    from igl_heatseg.atlas import _hull
+    from igl_heatseg.parameterization.atlas import _hull
 
     rng = np.random.default_rng(7)
     for n in (3, 50, 200, 3000):
@@ -149,7 +148,7 @@ def test_filtered_hull_equals_the_full_monotone_chain(kind):
 
 def test_obj_text_is_the_per_line_format(tmp_path, monkeypatch):
     """Block formatting writes exactly the lines of per-row ``%`` formatting."""
-    import igl_heatseg.atlas as atlas
+    import igl_heatseg.io.results as atlas
 
     monkeypatch.setattr(atlas, "_WRITE_ROWS", 7)  # several blocks, a partial last one
     rng = np.random.default_rng(3)

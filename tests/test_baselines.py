@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.baselines on meshes with known answers."""
+"""Tests for igl_heatseg.segmentation.baselines on meshes with known answers."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import igl
 import numpy as np
 import pytest
 
-from igl_heatseg.baselines import (
+from igl_heatseg.segmentation.baselines import (
     CONVEX_ETA,
     dihedral_region_growing,
     random_walk_weights,
@@ -15,7 +15,7 @@ from igl_heatseg.baselines import (
     xatlas_charts,
 )
 from igl_heatseg.errors import MeshError
-from igl_heatseg.evaluate import coverage, purity
+from igl_heatseg.evaluation.metrics import coverage, purity
 
 CUBE_V = np.array([[x, y, z] for x in (0.0, 1) for y in (0.0, 1) for z in (0.0, 1)])
 CUBE_F = np.array(

@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.bijectivity: flips, mirror images, folds, boundary overlaps, winding."""
+"""Tests for igl_heatseg.parameterization.bijectivity: flips, mirror images, folds, boundary overlaps, winding."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from igl_heatseg.bijectivity import (
+from igl_heatseg.parameterization.bijectivity import (
     _exact_orient,
     _exact_orient_many,
     boundary_self_intersections,
@@ -15,7 +15,7 @@ from igl_heatseg.bijectivity import (
     signed_areas,
 )
 from igl_heatseg.errors import MeshError
-from igl_heatseg.topology import boundary_loops
+from igl_heatseg.mesh.topology import boundary_loops
 
 
 def grid(nx, ny):
@@ -149,7 +149,7 @@ def test_grid_search_equals_brute_force_on_random_boundaries(seed, amp):
 
 
 def test_zero_length_segment_off_the_line_does_not_intersect():
-    from igl_heatseg.bijectivity import _segments_intersect
+    from igl_heatseg.parameterization.bijectivity import _segments_intersect
 
     P = np.array([[0.5, 0.2]])  # a point inside the other segment's bounding box, off its line
     Q1, Q2 = np.array([[0.0, 0.0]]), np.array([[1.0, 1.0]])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from igl_heatseg.cli import Progress, main
-from igl_heatseg.io import load_mesh
+from igl_heatseg.io.meshes import load_mesh
 
 
 def test_segment_writes_all_outputs(tmp_path, data_dir, capsys):
@@ -155,12 +155,12 @@ def test_help_lists_segment():
 
 
 def test_segment_robust_mode_reports_primitives_and_scores_better(tmp_path, data_dir):
-    from igl_heatseg.evaluate import coverage, purity, read_labels
+    from igl_heatseg.evaluation.metrics import coverage, purity, read_labels
 
     mesh = data_dir / "abc_00007974_5.ply"
     truth = read_labels(data_dir / "abc_00007974_5.facelabels.txt")
     area = load_mesh(mesh)
-    from igl_heatseg.segment import face_areas
+    from igl_heatseg.segmentation.paper import face_areas
 
     w = face_areas(area.V, area.F)
     scores = {}
@@ -184,7 +184,7 @@ def test_unknown_mode_is_rejected():
     from meshes import cube
 
     from igl_heatseg import validate_mesh
-    from igl_heatseg.segment import segment_with_mode
+    from igl_heatseg.segmentation import segment_with_mode
 
     with pytest.raises(ValueError, match="mode must be one of"):
         segment_with_mode(validate_mesh(*cube(2)), "fancy")

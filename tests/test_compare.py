@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.compare (the ``compare-param`` subcommand module)."""
+"""Tests for igl_heatseg.evaluation.compare (the ``compare-param`` subcommand module)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from igl_heatseg.checks import validate_mesh
-from igl_heatseg.compare import DEFAULT_METHODS, chart_disks, compare_param, format_table, register
+from igl_heatseg.mesh.checks import validate_mesh
+from igl_heatseg.cli.compare import register
+from igl_heatseg.evaluation.compare import DEFAULT_METHODS, chart_disks, compare_param, format_table
 from igl_heatseg.errors import MeshError
 
 

@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.cut: chart topology and cutting charts into disks."""
+"""Tests for igl_heatseg.parameterization.cut: chart topology and cutting charts into disks."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from igl_heatseg.cut import (
+from igl_heatseg.parameterization.cut import (
     chart_topology,
     cut_along_path,
     cut_along_paths,
@@ -16,7 +16,7 @@ from igl_heatseg.cut import (
     cut_to_disk,
 )
 from igl_heatseg.errors import MeshError
-from igl_heatseg.topology import boundary_loops, face_components
+from igl_heatseg.mesh.topology import boundary_loops, face_components
 
 #: Relative tolerance for a cut length against its analytic value on a regular mesh.
 LENGTH_RTOL = 0.03
@@ -475,7 +475,7 @@ GENERATRIX_STRAIGHTNESS = 1.06
     ("name", "genus"), [("block.ply", 3), ("psb_358_bearing.ply", 4), ("abc_00007974_5.ply", 4)]
 )
 def test_real_closed_meshes_of_higher_genus(data_dir, name, genus):
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     mesh = load_mesh(data_dir / name)
     res = cut_to_disk(mesh.V, mesh.F)
@@ -494,8 +494,8 @@ def test_real_closed_meshes_of_higher_genus(data_dir, name, genus):
 
 
 def test_real_block_segments_become_disks(data_dir):
-    from igl_heatseg.io import load_mesh
-    from igl_heatseg.segment import segment_mesh
+    from igl_heatseg.io.meshes import load_mesh
+    from igl_heatseg.segmentation.paper import segment_mesh
 
     mesh = load_mesh(data_dir / "block.ply")
     seg = segment_mesh(mesh, keep_solvers=False)
@@ -567,8 +567,8 @@ def test_any_random_chart_becomes_a_manifold_disk(seed, drop, surface):
     # corners keep their input vertex: same faces up to the duplication
     np.testing.assert_array_equal(res.vertex_map[res.F], Fc)
     # the sort-free topology update agrees with edge_topology, corner by corner
-    from igl_heatseg.cut import _open, _split_topology
-    from igl_heatseg.topology import edge_topology
+    from igl_heatseg.parameterization.cut import _open, _split_topology
+    from igl_heatseg.mesh.topology import edge_topology
 
     topo = edge_topology(Fc)
     cut = rng.random(len(topo.E)) < 0.2

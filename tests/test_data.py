@@ -1,6 +1,6 @@
 """Every shipped data file is credited, and every mesh loads."""
 
-from igl_heatseg.io import SUPPORTED_EXTENSIONS, load_mesh
+from igl_heatseg.io.meshes import SUPPORTED_EXTENSIONS, load_mesh
 
 
 def _files(data_dir):

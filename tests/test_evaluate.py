@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.evaluate: analytic cases first, then invariances, readers and the CLI."""
+"""Tests for igl_heatseg.evaluation.metrics: analytic cases first, then invariances, readers and the CLI."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from igl_heatseg.errors import MeshError
-from igl_heatseg.evaluate import (
+from igl_heatseg.cli.evaluate import register
+from igl_heatseg.evaluation.metrics import (
     consistency_errors,
     contingency_table,
     coverage,
@@ -26,7 +27,6 @@ from igl_heatseg.evaluate import (
     rand_index,
     read_labels,
     read_truth,
-    register,
 )
 
 TOL = 1e-12
@@ -171,7 +171,7 @@ def test_cut_discrepancy_between_parallel_cuts():
     s2 = (cx < 2.0).astype(int)
     c1, c2 = cut_edges(F, s1), cut_edges(F, s2)
     assert len(c1) == 4 and np.allclose(V[c1][:, :, 0], 1.0)
-    from igl_heatseg.topology import edge_topology
+    from igl_heatseg.mesh.topology import edge_topology
 
     E = edge_topology(F).E
     # every point of the line x=1 is exactly 1 away (along grid edges) from the line x=2

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from meshes import cube, cylinder, disk, grid, sphere
 
-from igl_heatseg.fastheat import FastHeatSolver, _merge_topk, _seed_face_labels, _topk_rows
-from igl_heatseg.heat import HeatSolver
-from igl_heatseg.seeds import seed_groups, seed_mask
+from igl_heatseg.heat.fast import FastHeatSolver, _merge_topk, _seed_face_labels, _topk_rows
+from igl_heatseg.heat.exact import HeatSolver
+from igl_heatseg.segmentation.seeds import seed_groups, seed_mask
 
 #: Agreement of exact temperatures from the two factorizations (CHOLMOD vs libigl).
 TEMP_TOL = 1e-10
@@ -93,7 +93,7 @@ def test_lower_bounds_on_delaunay_sphere():
 
 @pytest.mark.parametrize("name", ["fandisk.off", "block.ply"])
 def test_real_meshes_with_scan_like_noise(data_dir, name):
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     path = data_dir / name
     if not path.exists():
@@ -163,24 +163,19 @@ def test_seed_face_labels_majority_then_lowest_id():
 
 
 def _segment(mesh, solver, monkeypatch):
-    import inspect
+    from igl_heatseg.segmentation import segment_mesh
 
-    from igl_heatseg import segment as S
-
-    if "solver" in inspect.signature(S.segment_mesh).parameters:
-        return S.segment_mesh(mesh, solver=solver)
-    monkeypatch.setattr(S, "HeatSolver", FastHeatSolver if solver == "fast" else HeatSolver)
-    return S.segment_mesh(mesh)
+    return segment_mesh(mesh, solver=solver)
 
 
 def test_segment_mesh_fast_equals_exact_on_noisy_fandisk(data_dir, monkeypatch):
-    from igl_heatseg.checks import validate_mesh
-    from igl_heatseg.io import load_mesh
+    from igl_heatseg.mesh.checks import validate_mesh
+    from igl_heatseg.io.meshes import load_mesh
 
     path = data_dir / "fandisk.off"
     if not path.exists():
         pytest.skip("fandisk.off not in data/")
-    import igl_heatseg.fastheat as fh
+    import igl_heatseg.heat.fast as fh
 
     m = load_mesh(path)
     mesh = validate_mesh(_perturb(m.V, m.F, 0.05, 3), m.F)
@@ -200,7 +195,7 @@ def test_segment_mesh_fast_equals_exact_on_noisy_fandisk(data_dir, monkeypatch):
 def test_open_items_refined_with_nearby_groups(monkeypatch):
     """With two candidates kept per vertex, rivals are often outside the list ("open"):
     refinement must then try every nearby group, and the labels stay exact."""
-    import igl_heatseg.fastheat as fh
+    import igl_heatseg.heat.fast as fh
 
     V, F = sphere(4)
     V = _perturb(V, F, 0.2, 11)
@@ -215,7 +210,7 @@ def test_open_items_refined_with_nearby_groups(monkeypatch):
 def test_clusters_join_near_items_within_a_part():
     import scipy.sparse as sp
 
-    from igl_heatseg.fastheat import _clusters
+    from igl_heatseg.heat.fast import _clusters
 
     # a path graph 0-1-2-...-29
     n = 30
@@ -269,7 +264,7 @@ def test_exact_ties_in_the_fallback_go_to_the_lowest_group(monkeypatch):
     """A symmetric grid has exactly tied fields; the fallback's factorization (CHOLMOD or a
     different libigl one) rounds them apart by ~1e-16.  Ties must still go to the lowest id,
     as in the exact solver (case found by a random search in review)."""
-    import igl_heatseg.fastheat as fh
+    import igl_heatseg.heat.fast as fh
 
     V, F = grid(36, 36)
     rng = np.random.default_rng(131)

@@ -5,8 +5,8 @@ import scipy.sparse.linalg as sla
 from meshes import cylinder, grid, sphere
 
 from igl_heatseg.constants import TIE_RTOL
-from igl_heatseg.heat import HeatSolver, heat_fields
-from igl_heatseg.seeds import seed_groups, seed_mask
+from igl_heatseg.heat.exact import HeatSolver, heat_fields
+from igl_heatseg.segmentation.seeds import seed_groups, seed_mask
 
 
 def _two_seed_grid():
@@ -75,7 +75,7 @@ def test_streaming_labels_equal_dense_argmax_with_low_id_ties():
 
 
 def test_exact_ties_go_to_the_lowest_group_across_batches():
-    from igl_heatseg.heat import _argmax_update
+    from igl_heatseg.heat.exact import _argmax_update
 
     best = np.full(3, -np.inf)
     arg = np.zeros(3, dtype=np.int64)

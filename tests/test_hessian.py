@@ -1,4 +1,4 @@
-"""Property tests for the Hessian energies (igl_heatseg.hessian)."""
+"""Property tests for the Hessian energies (igl_heatseg.parameterization.hessian)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 import scipy.linalg as sla
 
 from igl_heatseg.errors import MeshError
-from igl_heatseg.hessian import (
+from igl_heatseg.parameterization.hessian import (
     HLLE_MIN_NEIGHBORS,
     curved_hessian_energy,
     hessian_energy,

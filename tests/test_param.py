@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.param: Hessian eigenmaps, Gram correction, fallback, distortion."""
+"""Tests for igl_heatseg.parameterization.param: Hessian eigenmaps, Gram correction, fallback, distortion."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from igl_heatseg.errors import MeshError
-from igl_heatseg.param import (
+from igl_heatseg.parameterization.param import (
     HLLE_SKIP_CURVATURE,
     METHODS,
     compare_methods,
@@ -181,7 +181,7 @@ def test_fallback_on_non_bijective_hessian_map():
 def test_repair_untangles_a_local_fold():
     """Mean value weights reproduce linear maps, so repairing a fold in an isometric map of a
     flat grid restores the isometry exactly."""
-    from igl_heatseg.bijectivity import certify_map
+    from igl_heatseg.parameterization.bijectivity import certify_map
 
     V, F = grid(6, 6, jitter=0.25, seed=1)
     UV = V[:, :2].copy()
@@ -246,8 +246,8 @@ def test_auto_energy_skips_hlle_on_scan_like_charts():
 
 def test_mirrored_certificate_is_the_recomputed_one():
     """_finish turns a mirror image over without certifying it again: same certificate."""
-    from igl_heatseg.bijectivity import certify_map
-    from igl_heatseg.param import _finish
+    from igl_heatseg.parameterization.bijectivity import certify_map
+    from igl_heatseg.parameterization.param import _finish
 
     V, F = sphere_cap(2.4)
     for UV in (tutte_map(V, F), map_chart(V, F, "hessian-hlle", name="c").UV):
@@ -290,14 +290,14 @@ def test_limit_blas_threads_restores_the_thread_count():
 
 @pytest.mark.parametrize("weights", ["mean_value", "uniform"])
 def test_tutte_is_bijective_on_bad_triangles(weights):
-    from igl_heatseg.bijectivity import certify_map
+    from igl_heatseg.parameterization.bijectivity import certify_map
 
     V, F = grid(10, 10, jitter=0.45, seed=3)
     V[:, 2] = np.sin(5 * V[:, 0]) * 0.5
     UV = tutte_map(V, F, weights=weights)
     assert certify_map(UV, F).bijective
     # Boundary on the unit circle.
-    from igl_heatseg.topology import boundary_loops
+    from igl_heatseg.mesh.topology import boundary_loops
 
     assert np.allclose(np.linalg.norm(UV[boundary_loops(F)[0]], axis=1), 1.0)
 
@@ -305,11 +305,11 @@ def test_tutte_is_bijective_on_bad_triangles(weights):
 def test_mean_value_tutte_reproduces_flat_interior():
     """Mean value weights have linear precision: with the boundary at its own positions a flat
     chart's interior comes back exactly (uniform weights do not on a jittered grid)."""
-    from igl_heatseg.param import _mean_value_laplacian
+    from igl_heatseg.parameterization.param import _mean_value_laplacian
 
     V, F = grid(8, 8, jitter=0.3, seed=2)
     L = _mean_value_laplacian(V, F)
-    from igl_heatseg.topology import boundary_loops
+    from igl_heatseg.mesh.topology import boundary_loops
 
     bnd = boundary_loops(F)[0]
     inner = np.setdiff1d(np.arange(len(V)), bnd)
@@ -422,8 +422,8 @@ def test_bad_arguments_raise():
 @pytest.mark.slow
 def test_fandisk_charts_are_all_bijective(fandisk):
     """Segment fandisk, cut every chart to a disk, parameterize: every chart bijective."""
-    from igl_heatseg.cut import cut_to_disk
-    from igl_heatseg.segment import segment_mesh
+    from igl_heatseg.parameterization.cut import cut_to_disk
+    from igl_heatseg.segmentation.paper import segment_mesh
 
     seg = segment_mesh(fandisk)
     k = int(seg.labels.max()) + 1

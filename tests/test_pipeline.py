@@ -9,10 +9,12 @@ import igl
 import numpy as np
 import pytest
 
-from igl_heatseg.atlas import boxes_overlap
-from igl_heatseg.checks import validate_mesh
+from igl_heatseg.parameterization.atlas import boxes_overlap
+from igl_heatseg.mesh.checks import validate_mesh
 from igl_heatseg.errors import MeshError
-from igl_heatseg.pipeline import parse_cut_path, register, run_pipeline
+from igl_heatseg.cli.run import parse_cut_path, register, write_pictures
+from igl_heatseg.io import write_run
+from igl_heatseg.pipeline import run_pipeline
 
 NU, NV, NR = 64, 8, 4
 HEIGHT, RADIUS = 2.0, 1.0
@@ -71,7 +73,8 @@ def side_chart(res):
 
 
 def test_can_auto(can_mesh, tmp_path):
-    res = run_pipeline(can_mesh, tmp_path)
+    res = run_pipeline(can_mesh)
+    write_run(tmp_path, res)
     assert len(res.charts) == 3
     side = side_chart(res)
     topo = side.report["topology"]
@@ -122,29 +125,29 @@ def test_can_auto(can_mesh, tmp_path):
 def test_chart_topology_in_the_report_is_the_chart_s_own(can_mesh):
     """With cut="auto" and no paths the report takes cut_to_disk's topology_before: the same
     as chart_topology of the chart, whichever way it is computed."""
-    from igl_heatseg.cut import chart_topology
+    from igl_heatseg.parameterization.cut import chart_topology
 
-    auto = run_pipeline(can_mesh, None)
-    first = run_pipeline(can_mesh, None, cut="none")  # computed before cutting
+    auto = run_pipeline(can_mesh)
+    first = run_pipeline(can_mesh, cut="none")  # computed before cutting
     for a, b in zip(auto.charts, first.charts, strict=True):
         assert a.report["topology"] == chart_topology(can_mesh.F[a.faces]).as_dict()
         assert a.report["topology"] == b.report["topology"]
 
 
 def test_hlle_skip_can_be_turned_off(can_mesh):
-    res = run_pipeline(can_mesh, None, hlle_skip_curvature=0.0)  # every chart curved
+    res = run_pipeline(can_mesh, hlle_skip_curvature=0.0)  # every chart curved
     for ch in res.charts:
         first = ch.report["attempts"][0]
         assert first["method"] == "hessian-hlle"
         if first["total_abs_curvature"] > 0:
             assert first["skipped"] and "reason" in first
-    res = run_pipeline(can_mesh, None, hlle_skip_curvature=None)
+    res = run_pipeline(can_mesh, hlle_skip_curvature=None)
     assert all("skipped" not in ch.report["attempts"][0] for ch in res.charts)
 
 
 def test_can_paper_mode_generatrix(can_mesh):
     v0, v1 = 5, NV * NU + 5  # bottom and top of the same generatrix (input ids)
-    res = run_pipeline(can_mesh, None, cut="none", cut_paths=[(v0, v1)])
+    res = run_pipeline(can_mesh, cut="none", cut_paths=[(v0, v1)])
     side = side_chart(res)
     assert side.report["cut_method"] == "paths"
     assert side.report["cut_length"] == pytest.approx(HEIGHT, rel=1e-12)
@@ -153,7 +156,7 @@ def test_can_paper_mode_generatrix(can_mesh):
 
 
 def test_can_no_cut_reports_non_disk(can_mesh):
-    res = run_pipeline(can_mesh, None, cut="none")
+    res = run_pipeline(can_mesh, cut="none")
     side = side_chart(res)
     assert side.report["parameterized"] is False
     assert side.report["bijective"] is False
@@ -165,16 +168,16 @@ def test_can_no_cut_reports_non_disk(can_mesh):
 def test_bad_cut_paths_raise(can_mesh):
     n = can_mesh.n_input_vertices
     with pytest.raises(MeshError, match=f"{n + 3} is outside"):
-        run_pipeline(can_mesh, None, cut_paths=[(0, n + 3)])
+        run_pipeline(can_mesh, cut_paths=[(0, n + 3)])
     centre_bottom = (NV + 1) * NU + (NR - 1) * NU
     with pytest.raises(MeshError, match="no chart contains both"):
-        run_pipeline(can_mesh, None, cut_paths=[(centre_bottom, centre_bottom + NU * (NR - 1) + 1)])
+        run_pipeline(can_mesh, cut_paths=[(centre_bottom, centre_bottom + NU * (NR - 1) + 1)])
     with pytest.raises(MeshError, match="starts and ends at one vertex"):
-        run_pipeline(can_mesh, None, cut_paths=[(5, 5)])
+        run_pipeline(can_mesh, cut_paths=[(5, 5)])
     with pytest.raises(MeshError, match="two vertex ids"):
-        run_pipeline(can_mesh, None, cut_paths=[(5, 6, 7)])
+        run_pipeline(can_mesh, cut_paths=[(5, 6, 7)])
     with pytest.raises(MeshError, match="cut"):
-        run_pipeline(can_mesh, None, cut="sometimes")
+        run_pipeline(can_mesh, cut="sometimes")
 
 
 def test_parse_cut_path():
@@ -202,7 +205,7 @@ def test_run_subcommand(tmp_path):
 
 def test_splitting_user_path_is_reported_not_fatal(can_mesh):
     # Both ends on the bottom loop: the path cuts the side in two pieces.
-    res = run_pipeline(can_mesh, None, cut_paths=[(0, NU // 2)])
+    res = run_pipeline(can_mesh, cut_paths=[(0, NU // 2)])
     side = side_chart(res)
     assert side.report["parameterized"] is False
     assert "2 edge-connected components" in side.report["error"]
@@ -226,16 +229,17 @@ def test_cli_main_run_and_bad_cut_path(tmp_path, capsys):
 
 def test_run_with_pictures(can_mesh, tmp_path):
     pytest.importorskip("polyscope")
-    res = run_pipeline(can_mesh, tmp_path, pictures=True)
+    res = run_pipeline(can_mesh)
+    report = write_run(tmp_path, res, pictures=write_pictures(tmp_path, res))
     # Rendering may be impossible here (no OpenGL): then it is skipped, never fatal.
-    for name in res.report["pictures"]:
+    for name in report["pictures"]:
         assert (tmp_path / name).stat().st_size > 0
 
 
 def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
-    import igl_heatseg.param as param_mod
+    import igl_heatseg.pipeline as pipeline_mod
 
-    real = param_mod.parameterize_chart
+    real = pipeline_mod.parameterize_chart
 
     def collapse_side(V, F, *args, **kwargs):
         p = real(V, F, *args, **kwargs)
@@ -243,8 +247,8 @@ def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
             p.UV = np.zeros_like(p.UV)
         return p
 
-    monkeypatch.setattr(param_mod, "parameterize_chart", collapse_side)
-    res = run_pipeline(can_mesh, None)
+    monkeypatch.setattr(pipeline_mod, "parameterize_chart", collapse_side)
+    res = run_pipeline(can_mesh)
     side = side_chart(res)
     assert "atlas_error" in side.report
     assert res.report["parameterization"]["charts_in_atlas"] == 2
@@ -254,7 +258,7 @@ def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
 def test_compose_user_path_then_auto_cut():
     from test_cut import plate_with_holes
 
-    from igl_heatseg.cut import cut_along_paths, cut_to_disk
+    from igl_heatseg.parameterization.cut import cut_along_paths, cut_to_disk
     from igl_heatseg.pipeline import _compose
 
     V, F = plate_with_holes()  # 20 x 20 cells, holes at cells (4..6, 4..6) and (12..14, 10..12)

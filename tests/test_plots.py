@@ -7,8 +7,8 @@ import pytest
 
 pytest.importorskip("matplotlib")
 
-from igl_heatseg import plots  # noqa: E402
-from igl_heatseg.viz import ChartMap  # noqa: E402
+from igl_heatseg.viz import plots  # noqa: E402
+from igl_heatseg.viz.core import ChartMap  # noqa: E402
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -46,8 +46,8 @@ def test_area_plot_bars_line_and_legend(tmp_path):
 def test_area_plot_matches_segmentation_eps_round():
     from pathlib import Path
 
-    from igl_heatseg.io import load_mesh
-    from igl_heatseg.segment import segment_mesh
+    from igl_heatseg.io.meshes import load_mesh
+    from igl_heatseg.segmentation.paper import segment_mesh
 
     seg = segment_mesh(load_mesh(Path(__file__).resolve().parent.parent / "data" / "fandisk.off"))
     fig = plots.plot_area_distribution(seg.initial_areas, seg.eps)

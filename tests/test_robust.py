@@ -1,4 +1,4 @@
-"""Tests for igl_heatseg.robust: denoising, curvature classes, primitive fits, robust mode."""
+"""Tests for igl_heatseg.segmentation.robust: denoising, curvature classes, primitive fits, robust mode."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import igl
 import numpy as np
 import pytest
 
-from igl_heatseg.checks import validate_mesh
+from igl_heatseg.mesh.checks import validate_mesh
 from igl_heatseg.errors import MeshError
-from igl_heatseg.evaluate import coverage, purity
-from igl_heatseg.robust import (
+from igl_heatseg.evaluation.metrics import coverage, purity
+from igl_heatseg.segmentation.robust import (
     RobustSegmentation,
     bilateral_normals,
     curvature_classes,
@@ -23,8 +23,8 @@ from igl_heatseg.robust import (
     primitive_type,
     segment_robust,
 )
-from igl_heatseg.segment import Segmentation
-from igl_heatseg.topology import face_components
+from igl_heatseg.segmentation.paper import Segmentation
+from igl_heatseg.mesh.topology import face_components
 
 FIT_TOL = 1e-9
 
@@ -177,8 +177,8 @@ def test_robust_mode_separates_fillets_on_a_generated_part():
 
 
 def test_split_along_creases_separates_cube_sides():
-    from igl_heatseg.robust import split_along_creases
-    from igl_heatseg.topology import edge_topology
+    from igl_heatseg.segmentation.robust import split_along_creases
+    from igl_heatseg.mesh.topology import edge_topology
 
     V, F, side = fine_box(2)
     topo = edge_topology(F)
@@ -200,7 +200,7 @@ def test_split_along_creases_separates_cube_sides():
 
 
 def test_merge_by_primitives_joins_pieces_of_one_surface_only():
-    from igl_heatseg.robust import merge_by_primitives
+    from igl_heatseg.segmentation.robust import merge_by_primitives
 
     V, F, side = fine_box(3)
     C = V[F].mean(axis=1)

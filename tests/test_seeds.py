@@ -3,8 +3,8 @@ import pytest
 from meshes import cube, cylinder, disk, grid, sphere
 
 from igl_heatseg.constants import THETA_DEFAULT
-from igl_heatseg.seeds import dihedral_deviation, face_normals, seed_groups, seed_mask, sharp_edges
-from igl_heatseg.topology import edge_topology
+from igl_heatseg.segmentation.seeds import dihedral_deviation, face_normals, seed_groups, seed_mask, sharp_edges
+from igl_heatseg.mesh.topology import edge_topology
 
 
 def test_coarse_cube_has_exactly_12_sharp_edges_at_right_angles():

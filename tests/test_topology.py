@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from meshes import cube, cylinder, sphere
 
-from igl_heatseg.topology import (
+from igl_heatseg.mesh.topology import (
     boundary_loops,
     corner_edges,
     edge_topology,

@@ -5,7 +5,7 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
 1. The chart must be a topological disk (one face component, one boundary loop, chi = 1);
    cut it first otherwise.  It is translated and scaled to unit area for the numerics; the
    map is scaled back at the end.
-2. Hessian energy ``K`` (:mod:`igl_heatseg.hessian`, ``"hlle"`` or ``"curved"``) and the Voronoi
+2. Hessian energy ``K`` (:mod:`igl_heatseg.parameterization.hessian`, ``"hlle"`` or ``"curved"``) and the Voronoi
    mass matrix ``M``; lowest eigenpairs of ``K y = lambda M y`` (shift-invert Lanczos with a
    slightly negative shift, dense ``eigh`` on small charts).  The constant is removed by
    M-centring the eigenvectors and dropping the direction it occupied.
@@ -16,7 +16,7 @@ Pipeline of :func:`parameterize_chart` (ALGORITHM.md sections 6-7):
    space has dimension ``d > 2`` (relative eigenvalues below :data:`NULLSPACE_TOL`, e.g. tiny
    charts) the same fit is done for a ``d x d`` ``G`` over all ``d`` null vectors and its best
    rank-2 part is used, which reduces to the 2 x 2 correction when ``d = 2``.
-4. The bijectivity certificate (:func:`igl_heatseg.bijectivity.certify_map`).  A mirror image
+4. The bijectivity certificate (:func:`igl_heatseg.parameterization.bijectivity.certify_map`).  A mirror image
    is turned over (``u -> -u``), not counted as flipped.
 5. If not bijective and the Hessian map only has local defects (flips, no boundary overlap):
    :func:`repair_map` re-solves a small region around them harmonically (uniform weights),
@@ -62,10 +62,10 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike
 
 from .bijectivity import Certificate, certify_map
-from .checks import as_mesh_arrays
-from .errors import MeshError
+from ..mesh.checks import as_mesh_arrays
+from ..errors import MeshError
 from .hessian import curved_hessian_energy, hlle_energy
-from .topology import boundary_loops, face_components
+from ..mesh.topology import boundary_loops, face_components
 
 __all__ = [
     "ChartParam",
@@ -452,8 +452,8 @@ def hessian_map(
     F : (m, 3) int64
         Triangles.
     energy : {"hlle", "curved"}
-        :func:`~igl_heatseg.hessian.hlle_energy` or
-        :func:`~igl_heatseg.hessian.curved_hessian_energy`.
+        :func:`~igl_heatseg.parameterization.hessian.hlle_energy` or
+        :func:`~igl_heatseg.parameterization.hessian.curved_hessian_energy`.
 
     Returns
     -------
@@ -903,7 +903,7 @@ def map_chart(
     name : str
         Chart name for messages.
     **energy_kwargs
-        Passed to :func:`~igl_heatseg.hessian.hlle_energy` for ``"hessian-hlle"``.
+        Passed to :func:`~igl_heatseg.parameterization.hessian.hlle_energy` for ``"hessian-hlle"``.
 
     Returns
     -------
@@ -963,8 +963,8 @@ def parameterize_chart(
         Triangles of a topological disk (1 component, 1 boundary loop, chi = 1), consistently
         oriented.  Any size from one triangle up.
     energy : {"hlle", "curved", "auto"}
-        Hessian energy: the paper's HLLE (:func:`~igl_heatseg.hessian.hlle_energy`), libigl's
-        curved Hessian (:func:`~igl_heatseg.hessian.curved_hessian_energy`), or ``"auto"``:
+        Hessian energy: the paper's HLLE (:func:`~igl_heatseg.parameterization.hessian.hlle_energy`), libigl's
+        curved Hessian (:func:`~igl_heatseg.parameterization.hessian.curved_hessian_energy`), or ``"auto"``:
         HLLE, and the curved Hessian when the HLLE map is not bijective (HLLE is the more
         accurate on creased CAD charts, the curved Hessian the more robust on scans).  Under
         ``"auto"``, HLLE is skipped (straight to the curved Hessian) on charts whose
@@ -988,7 +988,7 @@ def parameterize_chart(
     name : str
         Chart name for messages.
     **energy_kwargs
-        Passed to :func:`~igl_heatseg.hessian.hlle_energy`.
+        Passed to :func:`~igl_heatseg.parameterization.hessian.hlle_energy`.
 
     Returns
     -------

@@ -1,13 +1,13 @@
 """Compare parameterization methods on the charts of a segmented mesh.
 
 ``igl-heatseg compare-param MESH`` segments MESH (paper defaults), cuts every chart to a disk
-(:func:`igl_heatseg.cut.cut_to_disk`) and maps each chart with every method in ``--methods``
+(:func:`igl_heatseg.parameterization.cut.cut_to_disk`) and maps each chart with every method in ``--methods``
 (default: Hessian HLLE, Hessian curved, libigl harmonic, libigl LSCM), without fallbacks, all
 through the same bijectivity certificate and distortion code
-(:func:`igl_heatseg.param.compare_methods`).  It prints one table: chart, faces, method,
+(:func:`igl_heatseg.parameterization.param.compare_methods`).  It prints one table: chart, faces, method,
 bijective, flips, overlaps, distortions, seconds, and a per-method summary.  The pseudo-methods
 ``param-hlle``, ``param-curved`` and ``param-auto`` run the full chart parameterization
-(:func:`igl_heatseg.param.parameterize_chart`: Hessian map, local repair, certified fallbacks)
+(:func:`igl_heatseg.parameterization.param.parameterize_chart`: Hessian map, local repair, certified fallbacks)
 and report the map each chart got and the share of charts that needed a fallback.
 """
 
@@ -22,9 +22,10 @@ from typing import Sequence
 
 import numpy as np
 
-from .checks import CleanMesh
-from .errors import MeshError
-from .param import METHODS, PIPELINE_METHODS, compare_methods
+from ..mesh.checks import CleanMesh
+from ..errors import MeshError
+from ..parameterization.param import METHODS, PIPELINE_METHODS, compare_methods
+from ..segmentation import segment_with_mode
 
 __all__ = ["chart_disks", "compare_param", "format_table", "register", "DEFAULT_METHODS"]
 
@@ -71,8 +72,8 @@ def chart_disks(
         ``name`` is ``"<segment>.<piece>"``; ``V`` (n', 3), ``F`` (m', 3) the cut disk.  Pieces
         the cutter cannot turn into a disk are skipped with a warning.
     """
-    from .cut import cut_to_disk
-    from .topology import face_components
+    from ..parameterization.cut import cut_to_disk
+    from ..mesh.topology import face_components
 
     out = []
     for s in range(int(labels.max()) + 1 if len(labels) else 0):
@@ -103,6 +104,7 @@ def compare_param(
     eps: float | None = None,
     methods: Sequence[str] = DEFAULT_METHODS,
     min_faces: int = 1,
+    mode: str = "paper",
 ) -> list[dict]:
     """Segment, cut to disks and run every method on every chart.
 
@@ -113,35 +115,29 @@ def compare_param(
     theta, eps : float, optional
         Segmentation parameters (paper defaults when ``None``).
     methods : sequence of str
-        Names from :data:`igl_heatseg.param.METHODS` (one map, no fallback) or
-        :data:`igl_heatseg.param.PIPELINE_METHODS` (``param-hlle`` ...: the full chart
+        Names from :data:`igl_heatseg.parameterization.param.METHODS` (one map, no fallback) or
+        :data:`igl_heatseg.parameterization.param.PIPELINE_METHODS` (``param-hlle`` ...: the full chart
         parameterization with repair and fallbacks; the row's ``result`` says which map).
     min_faces : int
         Skip charts with fewer faces.
+    mode : {"paper", "robust"}
+        Segmentation mode; ``theta``/``eps`` ``None`` take its defaults.
 
     Returns
     -------
     rows : list of dict
-        One per (chart, method), see :func:`igl_heatseg.param.compare_methods`.
+        One per (chart, method), see :func:`igl_heatseg.parameterization.param.compare_methods`.
 
     Raises
     ------
     MeshError
         Unknown method names.
     """
-    from .constants import EPS_DEFAULT, THETA_DEFAULT
-    from .segment import segment_mesh
-
     known = METHODS + PIPELINE_METHODS
     bad = [m for m in methods if m not in known]
     if bad:
         raise MeshError(f"unknown method(s) {', '.join(bad)}; known: {', '.join(known)}")
-    seg = segment_mesh(
-        mesh,
-        THETA_DEFAULT if theta is None else theta,
-        EPS_DEFAULT if eps is None else eps,
-        keep_solvers=False,
-    )
+    seg = segment_with_mode(mesh, mode, theta, eps)
     charts = chart_disks(mesh, seg.labels, min_faces)
     return compare_methods(charts, methods)
 
@@ -196,55 +192,3 @@ def format_table(rows: list[dict]) -> str:
             line += f"   fallback {nfb}/{len(rs)} ({counts})"
         lines.append(line)
     return "\n".join(lines)
-
-
-def _cmd_compare(args) -> int:
-    from .io import load_mesh
-
-    t0 = time.perf_counter()
-    mesh = load_mesh(args.mesh)
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    rows = compare_param(mesh, args.theta, args.eps, methods, args.min_faces)
-    sys.stdout.write(format_table(rows) + "\n")
-    sys.stdout.write(
-        f"\n{Path(args.mesh).name}: {len({r['chart'] for r in rows})} charts, "
-        f"{time.perf_counter() - t0:.1f} s total\n"
-    )
-    if args.json:
-        clean = [
-            {k: (v if not isinstance(v, float) or np.isfinite(v) else None) for k, v in r.items()}
-            for r in rows
-        ]
-        Path(args.json).write_text(json.dumps(clean, indent=1))
-    return 0
-
-
-def register(subparsers) -> None:
-    """Add ``igl-heatseg compare-param MESH [--methods] [--theta] [--eps] [--json]``.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        From ``parser.add_subparsers()``; the subcommand sets ``func`` (``args -> int``).
-    """
-    from .cli import add_segment_arguments
-
-    p = subparsers.add_parser(
-        "compare-param",
-        help="compare parameterization methods on the charts of a segmented mesh",
-        description="Segment MESH, cut every chart to a disk and map it with several methods "
-        "(no fallback), all checked by the same bijectivity certificate; print one table "
-        "(chart, method, flips, overlaps, distortions, time).",
-    )
-    p.add_argument("mesh", help="input mesh file")
-    add_segment_arguments(p)
-    p.add_argument(
-        "--methods",
-        default=",".join(DEFAULT_METHODS),
-        help=f"comma-separated methods out of {', '.join(METHODS)} (one map, no fallback) and "
-        f"{', '.join(PIPELINE_METHODS)} (the full chart parameterization with repair and "
-        f"certified fallbacks) (default {','.join(DEFAULT_METHODS)})",
-    )
-    p.add_argument("--min-faces", type=int, default=1, help="skip charts with fewer faces")
-    p.add_argument("--json", metavar="PATH", help="also write the rows as JSON")
-    p.set_defaults(func=_cmd_compare)

@@ -1,6 +1,6 @@
 """Robust mode: the paper's seeds + heat pipeline made to survive scan noise and smooth blends.
 
-The paper's mode (:func:`igl_heatseg.segment.segment_mesh`) stays the default and faithful.
+The paper's mode (:func:`igl_heatseg.segmentation.paper.segment_mesh`) stays the default and faithful.
 This mode changes what the seeds are, measured on generated machined parts with exact B-Rep
 labels (``tools/make_parts.py``) and the two ABC parts; see ``benchmarks/segmentation_table.py``.
 
@@ -29,9 +29,9 @@ Pipeline of :func:`segment_robust`:
    ``axis_angle`` (so two fillets along different box edges, or a hub and its torus fillet,
    stay apart) and, for flat vertices, normals within ``flat_normal_angle`` (a large-radius
    fillet that turns too little per edge to count as curved is still cut from its plane).
-4. **Heat** (the paper's fields, :class:`igl_heatseg.fastheat.FastHeatSolver`) on the
+4. **Heat** (the paper's fields, :class:`igl_heatseg.heat.fast.FastHeatSolver`) on the
    denoised surface, argmax labels, islands merged
-   (:func:`igl_heatseg.segment.make_face_connected`).
+   (:func:`igl_heatseg.segmentation.paper.make_face_connected`).
 5. **Area threshold relative to the part**: groups whose segment is smaller than
    ``eps * (area of their component)`` lose their seeds (the largest group of a component is
    always kept), and step 4 runs again.  The paper compares with the largest segment, which on
@@ -54,18 +54,20 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .checks import CleanMesh
-from .errors import MeshError
-from .fastheat import FastHeatSolver
-from .seeds import dihedral_deviation
-from .segment import (
+from ..errors import MeshError
+from ..mesh.checks import CleanMesh
+from ..mesh.topology import edge_topology
+from .paper import (
+    SOLVERS,
     Segmentation,
     face_areas,
     final_numbering,
+    group_components,
     group_seedless_components,
-    make_face_connected,
+    heat_round,
 )
-from .topology import edge_topology
+from .params import ROBUST_EPS, ROBUST_THETA, check_segment_params, check_solver, eps_keep
+from .seeds import dihedral_deviation
 
 __all__ = [
     "RobustSegmentation",
@@ -90,11 +92,6 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Crease threshold on the filtered dihedral deviation (radians, 40 degrees).
-ROBUST_THETA: float = 0.7
-
-#: Segments smaller than this fraction of their component's area lose their seeds.
-ROBUST_EPS: float = 0.0015
 
 #: A vertex is flat when ``max |k| * mean_edge_length`` is below this (radians per edge).
 FLAT_CURVATURE: float = 0.15
@@ -151,7 +148,7 @@ _MIN_FIT_POINTS = 8
 
 @dataclass
 class RobustSegmentation(Segmentation):
-    """:class:`~igl_heatseg.segment.Segmentation` plus what robust mode adds.
+    """:class:`~igl_heatseg.segmentation.paper.Segmentation` plus what robust mode adds.
 
     ``theta`` is the crease threshold used; ``eps`` the part-relative area fraction;
     ``seed_mask``/``seed_group`` are the robust seeds; ``sharp_edges`` the creases.
@@ -619,10 +616,11 @@ def _expand_into_band(group: np.ndarray, band: np.ndarray, E: np.ndarray, rings:
     return group
 
 
-def _heat_round(W, F, group, L, area, topo):
-    solver = FastHeatSolver(W, F, group, L)
-    hl = solver.labels()
-    labels, merged = make_face_connected(W, F, hl.face_labels, group, area, topo)
+def _robust_round(W, F, group, L, area, topo, timings, stage, progress, solver_cls):
+    """One heat round on the denoised surface (the paper's round, see ``paper.heat_round``)."""
+    labels, _, merged, hl = heat_round(
+        W, F, group, L, area, topo, timings, stage, progress, solver_cls
+    )
     return labels, merged, hl
 
 
@@ -640,13 +638,15 @@ def segment_robust(
     crease_dilation: int = CREASE_DILATION,
     curvature_ring: int = CURVATURE_RING,
     merge: bool = True,
+    solver: str = "fast",
+    progress=None,
 ) -> RobustSegmentation:
     """Segment a validated mesh in robust mode (see the module docstring).
 
     Parameters
     ----------
     mesh : CleanMesh
-        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.checks.validate_mesh`.
+        From :func:`igl_heatseg.io.meshes.load_mesh` or :func:`igl_heatseg.mesh.checks.validate_mesh`.
     theta : float
         Crease threshold on the filtered dihedral deviation, radians in ``(0, pi]``.
     eps : float
@@ -666,6 +666,10 @@ def segment_robust(
         Rings of the curvature fit.
     merge : bool
         Merge adjacent segments that one primitive fits (:func:`merge_by_primitives`).
+    solver : {"fast", "exact"}
+        Heat solver, as in :func:`igl_heatseg.segmentation.paper.segment_mesh`.
+    progress : callable(stage, fraction), optional
+        Progress of the heat rounds.
 
     Returns
     -------
@@ -678,10 +682,8 @@ def segment_robust(
     MeshError
         If a parameter is out of range.
     """
-    if not (isinstance(theta, (int, float)) and 0 < theta <= math.pi):
-        raise MeshError(f"theta must be in (0, pi] radians, got {theta!r}")
-    if not (isinstance(eps, (int, float)) and 0 <= eps <= 1):
-        raise MeshError(f"eps must be in [0, 1], got {eps!r}")
+    check_segment_params(theta, eps)
+    check_solver(solver)
     if crease_dilation < 0 or curvature_ring < 1:
         raise MeshError("crease_dilation must be >= 0 and curvature_ring >= 1")
     V, F = mesh.V, mesh.F
@@ -746,29 +748,25 @@ def segment_robust(
 
     t = time.perf_counter()
     L = igl.cotmatrix(W, F)
-    labels0, merged0, hl0 = _heat_round(
-        W, F, _expand_into_band(group0, band, E, crease_dilation), L, areaW, topo
+    labels0, merged0, hl0 = _robust_round(
+        W, F, _expand_into_band(group0, band, E, crease_dilation), L, areaW, topo,
+        timings, "initial", progress, SOLVERS[solver],
     )
     areas0 = np.bincount(labels0, weights=areaW, minlength=k0)
     timings["heat_initial"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    gcomp = np.zeros(k0, dtype=np.int64)
-    gcomp[group0[group0 >= 0]] = vcomp[group0 >= 0]
-    comp_area = np.bincount(gcomp, weights=areas0, minlength=ncomp)
-    largest = np.zeros(ncomp)
-    np.maximum.at(largest, gcomp, areas0)
-    keep = (areas0 >= eps * comp_area[gcomp]) | (areas0 == largest[gcomp])
-    keep &= areas0 > 0
-    kept = np.flatnonzero(keep)
+    gcomp = group_components(group0, vcomp, k0)
+    kept = np.flatnonzero(eps_keep(areas0, gcomp, eps, "component"))
     if len(kept) == k0:
         labels1, merged1, hl1, group1 = labels0, merged0, hl0, group0
     else:
         remap = np.full(k0, -1, dtype=np.int64)
         remap[kept] = np.arange(len(kept))
         group1 = np.where(group0 >= 0, remap[np.maximum(group0, 0)], -1)
-        labels1, merged1, hl1 = _heat_round(
-            W, F, _expand_into_band(group1, band, E, crease_dilation), L, areaW, topo
+        labels1, merged1, hl1 = _robust_round(
+            W, F, _expand_into_band(group1, band, E, crease_dilation), L, areaW, topo,
+            timings, "final", progress, SOLVERS[solver],
         )
     timings["heat_final"] = time.perf_counter() - t
 
@@ -813,6 +811,8 @@ def segment_robust(
         theta=float(theta),
         eps=float(eps),
         timings=timings,
+        group_component=gcomp,
+        mode="robust",
         primitive_types=types,
         primitive_rms=np.asarray(rms, dtype=np.float64),
         vertex_class=cls,

@@ -7,11 +7,14 @@ no display is needed), with an install hint (``pip install igl_heatseg[viz]``).
 from __future__ import annotations
 
 import logging
+import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+
+from ..segmentation.params import check_segment_params, eps_keep
 from numpy.typing import ArrayLike
 
 __all__ = ["area_threshold", "plot_area_distribution", "plot_chart_maps", "plot_sweep"]
@@ -38,7 +41,7 @@ def _pyplot():
     try:
         import matplotlib
     except ImportError as exc:
-        raise ImportError(f"igl_heatseg.plots needs matplotlib: {INSTALL_HINT}") from exc
+        raise ImportError(f"igl_heatseg.viz.plots needs matplotlib: {INSTALL_HINT}") from exc
     import matplotlib.pyplot as plt
 
     if plt.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):
@@ -50,7 +53,7 @@ def _pyplot():
 
 
 def area_threshold(areas: ArrayLike, eps: float) -> float:
-    """The eps round's threshold ``eps * max(areas)``.
+    """The eps round's threshold ``eps * max(areas)`` on one component (paper rule).
 
     Parameters
     ----------
@@ -63,7 +66,7 @@ def area_threshold(areas: ArrayLike, eps: float) -> float:
     -------
     float
         Groups with area strictly below this lose their seeds (for a one-component mesh;
-        :func:`igl_heatseg.segment.segment_mesh` applies it per connected component).
+        :func:`igl_heatseg.segmentation.paper.segment_mesh` applies it per connected component).
 
     Examples
     --------
@@ -82,6 +85,8 @@ def plot_area_distribution(
     log_scale: bool = True,
     title: str | None = None,
     ax=None,
+    components: ArrayLike | None = None,
+    reference: str = "largest",
 ):
     """Bar chart of the sorted initial segment areas with the line ``eps * A_largest`` (Fig. 12).
 
@@ -103,6 +108,13 @@ def plot_area_distribution(
     title : str, optional
     ax : matplotlib Axes, optional
         Draw into this Axes instead of a new figure.
+    components : (k,) array_like of int, optional
+        Connected component of each group (``Segmentation.group_component``): bars are marked
+        kept or dropped by the segmentation's own rule
+        (:func:`igl_heatseg.segmentation.params.eps_keep`), per component; the line is drawn
+        for the component of the largest segment.
+    reference : {"largest", "component"}
+        What eps is a fraction of (the mode's rule: ``"component"`` in robust mode).
 
     Returns
     -------
@@ -118,12 +130,18 @@ def plot_area_distribution(
         raise ValueError("areas is empty: nothing to plot")
     if not np.all(np.isfinite(a)) or (a < 0).any():
         raise ValueError("areas must be finite and non-negative")
-    if not 0 <= eps <= 1:
-        raise ValueError(f"eps must be in [0, 1], got {eps}")
+    check_segment_params(math.pi / 2, eps)
     plt = _pyplot()
-    a = np.sort(a)[::-1]
-    thr = area_threshold(a, eps)
-    kept = a >= thr
+    comp = np.zeros(a.size, dtype=np.int64) if components is None else np.asarray(components)
+    if comp.shape != a.shape:
+        raise ValueError(f"components should have shape {a.shape}, shape is {comp.shape}")
+    order = np.argsort(-a, kind="stable")
+    a, comp = a[order], comp[order]
+    kept = eps_keep(a, comp, eps, reference)
+    # the line: the threshold of the largest segment's component
+    in_top = comp == comp[0]
+    ref_area = a[in_top].sum() if reference == "component" else a[0]
+    thr = eps * ref_area
     if ax is None:
         fig, ax = plt.subplots(figsize=(8, 4.5))
     else:
@@ -143,7 +161,9 @@ def plot_area_distribution(
         color=EPS_LINE_COLOR,
         lw=1.5,
         ls="--",
-        label=f"eps * A_largest = {eps:g} * {a[0]:.3g} = {thr:.3g}",
+        label=f"eps * {'A_component' if reference == 'component' else 'A_largest'} = "
+        f"{eps:g} * {ref_area:.3g} = {thr:.3g}"
+        + (" (largest component)" if len(np.unique(comp)) > 1 else ""),
     )
     if log_scale:
         pos = a[a > 0]
@@ -181,7 +201,7 @@ def plot_chart_maps(
     Parameters
     ----------
     charts : iterable
-        Chart maps (see :func:`igl_heatseg.viz.as_chart_maps`).
+        Chart maps (see :func:`igl_heatseg.viz.core.as_chart_maps`).
     V : (n, 3) array_like of float
         Vertices of the whole mesh.
     path : str or path-like, optional
@@ -199,8 +219,8 @@ def plot_chart_maps(
     """
     from matplotlib.collections import PolyCollection
 
-    from .io import label_colors
-    from .viz import as_chart_maps
+    from ..io.results import label_colors
+    from .core import as_chart_maps
 
     plt = _pyplot()
     ch = as_chart_maps(charts)

@@ -1,6 +1,6 @@
 """Fast heat-field labels for meshes with thousands of seed groups (issue 5).
 
-:class:`FastHeatSolver` has :class:`~igl_heatseg.heat.HeatSolver`'s interface and returns the
+:class:`FastHeatSolver` has :class:`~igl_heatseg.heat.exact.HeatSolver`'s interface and returns the
 same argmax labels, but never solves one global system per group.
 
 The problem (ALGORITHM.md §2): with ``A = -L`` (``L = igl.cotmatrix``, negative
@@ -69,8 +69,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .constants import HEAT_SUM_TOL
-from .heat import HeatLabels, _argmax_update, corner_means, require_seeded_components
+from ..constants import HEAT_SUM_TOL
+from .exact import HeatLabels, _argmax_update, corner_means, require_seeded_components
 
 __all__ = [
     "FastHeatSolver",
@@ -244,7 +244,7 @@ class _Refined(NamedTuple):
 class FastHeatSolver:
     """Argmax labels of the heat fields of many seed groups, by certified local solves.
 
-    Same interface as :class:`~igl_heatseg.heat.HeatSolver`; see the module docstring for
+    Same interface as :class:`~igl_heatseg.heat.exact.HeatSolver`; see the module docstring for
     the method.
 
     Parameters

@@ -15,8 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .constants import THETA_DEFAULT
-from .topology import EdgeTopology, edge_topology
+from ..constants import THETA_DEFAULT
+from ..mesh.topology import EdgeTopology, edge_topology
 
 __all__ = ["face_normals", "dihedral_deviation", "sharp_edges", "seed_mask", "seed_groups"]
 

@@ -1,6 +1,6 @@
 """Pack chart UV maps into one texture atlas in the unit square, and write OBJ files with UVs.
 
-Every chart map is assumed bijective already (see :mod:`igl_heatseg.bijectivity`); packing only
+Every chart map is assumed bijective already (see :mod:`igl_heatseg.parameterization.bijectivity`); packing only
 moves charts rigidly (rotation + translation) and scales all of them by one common factor, so
 each chart keeps its orientation and its map stays bijective, and charts do not overlap each
 other because their (gutter-padded) bounding boxes do not.
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import MeshError
+from ..errors import MeshError
 
 __all__ = [
     "PackedAtlas",
@@ -486,105 +486,3 @@ def atlas_corner_uv(m: int, chart_faces: list, chart_F: list, uvs: list) -> np.n
             f"instead of exactly one, e.g. faces {bad[:5].tolist()}"
         )
     return out
-
-
-def _check_write(V, F, n_name: str) -> tuple[np.ndarray, np.ndarray]:
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F)
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise MeshError(f"`V` should have shape (n,3), shape is {V.shape}")
-    if F.ndim != 2 or F.shape[1] != 3 or F.dtype.kind not in "iu":
-        raise MeshError(f"`F` should be (m,3) integers, got shape {F.shape} dtype {F.dtype}")
-    if F.size and (F.min() < 0 or F.max() >= len(V)):
-        raise MeshError(f"`F` has indices outside 0..{len(V) - 1} ({n_name})")
-    return V, F.astype(np.int64)
-
-
-#: Rows formatted per ``%`` call in :func:`_write`.
-_WRITE_ROWS = 65536
-
-
-def _write_rows(fh, fmt: str, A: np.ndarray) -> None:
-    """Write ``fmt % row`` for every row of ``A``: one ``%`` per block of rows (one format
-    string repeated), 1.8-2.4x faster than one per row, same text."""
-    for s in range(0, len(A), _WRITE_ROWS):
-        B = A[s : s + _WRITE_ROWS]
-        fh.write((fmt * len(B)) % tuple(B.ravel().tolist()))
-
-
-def _write(path, header: str, V: np.ndarray, VT: np.ndarray, F: np.ndarray, FT: np.ndarray):
-    I = np.stack([F + 1, FT + 1], axis=2).reshape(-1, 6)
-    with open(os.fspath(path), "w", encoding="ascii") as fh:
-        fh.write(header + "\n")
-        _write_rows(fh, "v %.17g %.17g %.17g\n", V)
-        _write_rows(fh, "vt %.17g %.17g\n", VT)
-        _write_rows(fh, "f %d/%d %d/%d %d/%d\n", I)
-
-
-def write_chart_obj(path: str | os.PathLike, V: ArrayLike, F: ArrayLike, UV: ArrayLike) -> None:
-    """Write one chart as OBJ: ``v`` (3D positions), ``vt`` (its UV), ``f v/vt v/vt v/vt``.
-
-    Parameters
-    ----------
-    path : str or path-like
-    V : (n, 3) array_like of float
-        The chart's (cut) vertex positions.
-    F : (m, 3) array_like of int
-        Triangles, 0-based (written 1-based).
-    UV : (n, 2) array_like of float
-        One UV per vertex (``vt`` index = ``v`` index).
-
-    Raises
-    ------
-    MeshError
-        Mismatched shapes or out-of-range indices.
-    """
-    V, F = _check_write(V, F, "chart")
-    UV = np.asarray(UV, dtype=np.float64)
-    if UV.shape != (V.shape[0], 2):
-        raise MeshError(f"`UV` should have shape ({V.shape[0]},2), shape is {UV.shape}")
-    _write(path, "# igl_heatseg chart: v = 3D position, vt = chart UV", V, UV, F, F)
-
-
-def _unique_rows(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(P, axis=0, return_inverse=True)`` for (k, 2) floats, via one lexsort."""
-    order = np.lexsort((P[:, 1], P[:, 0]))
-    S = P[order]
-    new = np.ones(len(S), dtype=bool)
-    new[1:] = (S[1:] != S[:-1]).any(axis=1)
-    inv = np.empty(len(P), dtype=np.int64)
-    inv[order] = np.cumsum(new) - 1
-    return S[new], inv
-
-
-def write_atlas_obj(
-    path: str | os.PathLike, V_input: ArrayLike, F_input: ArrayLike, corner_uv: ArrayLike
-) -> None:
-    """Write the whole mesh with per-corner UVs (one ``vt`` per distinct corner UV).
-
-    Vertices and faces are written in the input's order, so the OBJ's faces line up with
-    ``F_input`` (and per-face label files).
-
-    Parameters
-    ----------
-    path : str or path-like
-    V_input : (n, 3) array_like of float
-    F_input : (m, 3) array_like of int
-    corner_uv : (m, 3, 2) array_like of float
-        UV of corner ``j`` of face ``f`` (e.g. from :func:`atlas_corner_uv`).
-
-    Raises
-    ------
-    MeshError
-        Mismatched shapes, out-of-range indices or non-finite UVs.
-    """
-    V, F = _check_write(V_input, F_input, "mesh")
-    C = np.asarray(corner_uv, dtype=np.float64)
-    if C.shape != (F.shape[0], 3, 2):
-        raise MeshError(f"`corner_uv` should have shape ({F.shape[0]},3,2), shape is {C.shape}")
-    if not np.isfinite(C).all():
-        bad = np.flatnonzero(~np.isfinite(C).all(axis=(1, 2)))
-        raise MeshError(f"`corner_uv` is not finite on {len(bad)} face(s), e.g. {bad[:5].tolist()}")
-    VT, inv = _unique_rows(C.reshape(-1, 2))
-    FT = inv.reshape(-1, 3)
-    _write(path, "# igl_heatseg atlas: per-corner UVs in [0,1]^2", V, VT, F, FT)

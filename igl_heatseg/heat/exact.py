@@ -20,8 +20,8 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
-from .constants import HEAT_SUM_TOL, TIE_RTOL
-from .topology import vertex_components
+from ..constants import HEAT_SUM_TOL, TIE_RTOL
+from ..mesh.topology import vertex_components
 
 __all__ = ["HeatSolver", "HeatLabels", "heat_fields"]
 

@@ -1,6 +1,6 @@
 """Combinatorial helpers on triangle meshes (edges, adjacency, components, boundary loops).
 
-All functions here take trusted, validated input (see :func:`igl_heatseg.checks.validate_mesh`).
+All functions here take trusted, validated input (see :func:`igl_heatseg.mesh.checks.validate_mesh`).
 
 Edge convention (libigl's): edge ``j`` of face ``f`` is the one *opposite* corner ``j``, i.e.
 ``(F[f, (j+1) % 3], F[f, (j+2) % 3])``; the corner-edge index is ``c = j * m + f``

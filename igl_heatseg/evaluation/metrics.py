@@ -55,9 +55,9 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import dijkstra
 
-from .errors import MeshError
-from .segment import face_areas
-from .topology import edge_topology
+from ..errors import MeshError
+from ..segmentation.paper import face_areas
+from ..mesh.topology import edge_topology
 
 __all__ = [
     "Evaluation",
@@ -340,7 +340,7 @@ def cut_edges(F: np.ndarray, labels: np.ndarray, topo=None) -> np.ndarray:
     F : (m, 3) int64
     labels : (m,) int64
     topo : EdgeTopology, optional
-        Precomputed :func:`igl_heatseg.topology.edge_topology` of ``F``.
+        Precomputed :func:`igl_heatseg.mesh.topology.edge_topology` of ``F``.
 
     Returns
     -------
@@ -572,7 +572,7 @@ def evaluate_labels(
         If a label array's length differs from the face count, labels are not integers, or
         ``weighting`` is unknown.
     """
-    from .checks import as_mesh_arrays
+    from ..mesh.checks import as_mesh_arrays
 
     V, F = as_mesh_arrays(V, F, "mesh")
     m = F.shape[0]
@@ -719,114 +719,3 @@ def _natural_key(p: Path):
 # --------------------------------------------------------------------------------------------
 # Command line
 # --------------------------------------------------------------------------------------------
-
-
-def _load_mesh(path: str):
-    """Mesh in file face order, validated (the lead's io.load_mesh when it exists)."""
-    try:
-        from .io import load_mesh  # type: ignore[attr-defined]
-    except ImportError:
-        load_mesh = None
-    if load_mesh is not None:
-        return load_mesh(path)
-    import igl
-
-    from .checks import validate_mesh
-
-    if not Path(path).exists():
-        raise MeshError(f"{path}: no such file")
-    V, F = igl.read_triangle_mesh(str(path))
-    return validate_mesh(V, F, name=str(path))
-
-
-def _format_evaluation(ev: Evaluation, mesh_name: str, truth_name: str) -> str:
-    rows = [
-        ("mesh", mesh_name),
-        ("truth", f"{truth_name} ({ev.n_truths} labeling(s), {ev.n_true_segments:g} segments)"),
-        ("faces", str(ev.n_faces)),
-        ("segments", str(ev.n_segments)),
-        ("weighting", ev.weighting),
-        ("purity (higher better)", f"{ev.purity:.4f}"),
-        ("coverage (higher better)", f"{ev.coverage:.4f}"),
-        ("rand index, area-weighted", f"{ev.rand_index:.4f}"),
-        ("PSB cut discrepancy", f"{ev.cut_discrepancy:.4f}"),
-        ("PSB hamming (Rm, Rf)", f"{ev.hamming:.4f} ({ev.hamming_rm:.4f}, {ev.hamming_rf:.4f})"),
-        ("PSB 1 - rand index", f"{ev.psb_rand_index:.4f}"),
-        ("PSB GCE / LCE", f"{ev.gce:.4f} / {ev.lce:.4f}"),
-    ]
-    width = max(len(k) for k, _ in rows)
-    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows) + "\n"
-
-
-def _run(args) -> int:
-    t0 = time.perf_counter()
-    try:
-        mesh = _load_mesh(args.mesh)
-        m = mesh.F.shape[0]
-        truths = read_truth(args.truth, m)
-        if args.pred is not None:
-            pred_path = Path(args.pred)
-            if pred_path.is_dir():
-                pred_path = pred_path / "labels.txt"
-            pred = read_labels(pred_path, m)
-        else:
-            from .segment import segment_with_mode
-
-            pred = segment_with_mode(mesh, args.mode).labels
-        ev = evaluate_labels(mesh.V, mesh.F, pred, truths, weighting=args.weighting)
-    except MeshError as exc:
-        sys.stderr.write(f"igl-heatseg evaluate: error: {exc}\n")
-        return 2
-    if args.json:
-        import json
-
-        sys.stdout.write(json.dumps(ev.as_dict(), indent=2) + "\n")
-    else:
-        sys.stdout.write(_format_evaluation(ev, str(args.mesh), str(args.truth)))
-    logger.info("evaluate: %.2f s", time.perf_counter() - t0)
-    return 0
-
-
-def register(subparsers) -> None:
-    """Add ``igl-heatseg evaluate MESH --truth LABELS_OR_DIR [--pred DIR] [--mode robust]``.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        From ``parser.add_subparsers()``; the subcommand sets ``func`` (``args -> int``).
-    """
-    p = subparsers.add_parser(
-        "evaluate",
-        help="score a segmentation against ground-truth face labels",
-        description=(
-            "Compare per-face labels with a ground truth: purity, coverage, Rand index and the "
-            "Princeton Segmentation Benchmark metrics (averaged over several truths)."
-        ),
-    )
-    p.add_argument("mesh", help="mesh file (labels refer to its face order)")
-    p.add_argument(
-        "--truth",
-        required=True,
-        help="label file (one integer per line: PSB .seg, ABC facelabels.txt) or a directory "
-        "of .seg files (several human segmentations, scores averaged)",
-    )
-    p.add_argument(
-        "--pred",
-        default=None,
-        help="directory holding labels.txt written by `igl-heatseg segment` (or the labels "
-        "file itself); default: segment the mesh with the paper's defaults",
-    )
-    p.add_argument(
-        "--mode",
-        choices=("paper", "robust"),
-        default="paper",
-        help="without --pred: segment with the paper's mode (default) or robust mode",
-    )
-    p.add_argument(
-        "--weighting",
-        choices=("area", "count"),
-        default="area",
-        help="face weights of purity, coverage, Rand index, Hamming, GCE/LCE (default area)",
-    )
-    p.add_argument("--json", action="store_true", help="print the scores as JSON")
-    p.set_defaults(func=_run)

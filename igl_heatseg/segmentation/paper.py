@@ -26,24 +26,24 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .checks import CleanMesh
-from .constants import EPS_DEFAULT, THETA_DEFAULT
-from .fastheat import FastHeatSolver
-from .heat import HeatSolver
+from ..mesh.checks import CleanMesh
+from ..constants import EPS_DEFAULT, THETA_DEFAULT
+from ..heat.fast import FastHeatSolver
+from ..heat.exact import HeatSolver
+from .params import check_segment_params, check_solver, eps_keep
 from .seeds import dihedral_deviation, seed_groups, sharp_edges
-from .topology import EdgeTopology, edge_topology, vertex_components
+from ..mesh.topology import EdgeTopology, edge_topology, vertex_components
 
 __all__ = [
-    "MODES",
-    "segment_with_mode",
     "final_numbering",
     "group_seedless_components",
     "Segmentation",
     "segment_mesh",
-    "segment",
     "make_face_connected",
     "face_areas",
     "SOLVERS",
+    "heat_round",
+    "group_components",
 ]
 
 log = logging.getLogger(__name__)
@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 Progress = Callable[[str, float], None]
 
 #: Heat solvers by name: "fast" (default; certified local solves, same labels) and "exact"
-#: (the reference: one global solve per group).  See :mod:`igl_heatseg.fastheat`.
+#: (the reference: one global solve per group).  See :mod:`igl_heatseg.heat.fast`.
 SOLVERS = {"fast": FastHeatSolver, "exact": HeatSolver}
 
 
@@ -97,6 +97,10 @@ class Segmentation:
         Parameters used.
     timings : dict of str to float
         Seconds per stage.
+    group_component : (k0,) int64
+        Connected component of each initial group (what the eps rule is applied per).
+    mode : str
+        ``"paper"`` or ``"robust"``.
     """
 
     labels: np.ndarray
@@ -118,6 +122,8 @@ class Segmentation:
     theta: float
     eps: float
     timings: dict = field(default_factory=dict)
+    group_component: np.ndarray | None = None
+    mode: str = "paper"
     _solvers: tuple = field(default=(None, None), repr=False)
 
     @property
@@ -188,6 +194,27 @@ def group_seedless_components(
     return group, k + len(seedless), len(seedless), ncomp, vcomp
 
 
+def group_components(group: np.ndarray, vcomp: np.ndarray, k: int) -> np.ndarray:
+    """Connected component of each seed group.
+
+    Parameters
+    ----------
+    group : (n,) int64
+        Seed group per vertex, ``-1`` for non-seeds.
+    vcomp : (n,) int64
+        Connected component per vertex.
+    k : int
+        Number of groups.
+
+    Returns
+    -------
+    gcomp : (k,) int64
+    """
+    gcomp = np.zeros(k, dtype=np.int64)
+    gcomp[group[group >= 0]] = vcomp[group >= 0]
+    return gcomp
+
+
 def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Face areas, shape (m,)."""
     return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
@@ -207,7 +234,7 @@ def segment_mesh(
     Parameters
     ----------
     mesh : CleanMesh
-        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.checks.validate_mesh`.
+        From :func:`igl_heatseg.io.meshes.load_mesh` or :func:`igl_heatseg.mesh.checks.validate_mesh`.
     theta : float
         Dihedral threshold in radians, ``0 < theta <= pi`` (default pi/20, paper Table 1).
     eps : float
@@ -218,8 +245,8 @@ def segment_mesh(
     keep_solvers : bool
         Keep both factorizations so that :meth:`Segmentation.temperature` works.
     solver : {"fast", "exact"}
-        Heat solver: ``"fast"`` (:class:`~igl_heatseg.fastheat.FastHeatSolver`, default)
-        or ``"exact"`` (:class:`~igl_heatseg.heat.HeatSolver`, one global solve per group;
+        Heat solver: ``"fast"`` (:class:`~igl_heatseg.heat.fast.FastHeatSolver`, default)
+        or ``"exact"`` (:class:`~igl_heatseg.heat.exact.HeatSolver`, one global solve per group;
         the reference the fast one is tested against).
 
     Returns
@@ -241,12 +268,8 @@ def segment_mesh(
     >>> seg.num_segments
     1
     """
-    if not (isinstance(theta, (int, float)) and 0 < theta <= math.pi):
-        raise ValueError(f"theta must be in (0, pi] radians, got {theta!r}")
-    if not (isinstance(eps, (int, float)) and 0 <= eps <= 1):
-        raise ValueError(f"eps must be in [0, 1], got {eps!r}")
-    if solver not in SOLVERS:
-        raise ValueError(f"solver must be one of {sorted(SOLVERS)}, got {solver!r}")
+    check_segment_params(theta, eps)
+    check_solver(solver)
     solver_cls = SOLVERS[solver]
     V, F = mesh.V, mesh.F
     n = V.shape[0]
@@ -268,19 +291,14 @@ def segment_mesh(
     L = igl.cotmatrix(V, F)
     timings["laplacian"] = time.perf_counter() - t
 
-    labels0, solver0, merged0, hl0 = _heat_round(
+    labels0, solver0, merged0, hl0 = heat_round(
         V, F, group0, L, area, topo, timings, "initial", progress, solver_cls
     )
     areas0 = np.bincount(labels0, weights=area, minlength=k0)
 
     # eps round, per component.
-    gcomp = np.zeros(k0, dtype=np.int64)
-    gcomp[group0[group0 >= 0]] = vcomp[group0 >= 0]
-    largest = np.zeros(ncomp)
-    np.maximum.at(largest, gcomp, areas0)
-    keep = areas0 >= eps * largest[gcomp]
-    keep &= areas0 > 0
-    kept = np.flatnonzero(keep)
+    gcomp = group_components(group0, vcomp, k0)
+    kept = np.flatnonzero(eps_keep(areas0, gcomp, eps, "largest"))
     if len(kept) == k0:
         labels1, solver1, merged1, hl1 = labels0, solver0, merged0, hl0
         group1 = group0
@@ -288,7 +306,7 @@ def segment_mesh(
         remap = np.full(k0, -1, dtype=np.int64)
         remap[kept] = np.arange(len(kept))
         group1 = np.where(group0 >= 0, remap[np.maximum(group0, 0)], -1)
-        labels1, solver1, merged1, hl1 = _heat_round(
+        labels1, solver1, merged1, hl1 = heat_round(
             V, F, group1, L, area, topo, timings, "final", progress, solver_cls
         )
     labels, vertex_labels, segment_areas, order = final_numbering(
@@ -315,6 +333,7 @@ def segment_mesh(
         theta=float(theta),
         eps=float(eps),
         timings=timings,
+        group_component=gcomp,
         _solvers=(solver0, solver1) if keep_solvers else (None, None),
     )
 
@@ -362,7 +381,12 @@ def final_numbering(
     return out, vout, areas[order], order
 
 
-def _heat_round(V, F, group, L, area, topo, timings, stage, progress, solver_cls=FastHeatSolver):
+def heat_round(V, F, group, L, area, topo, timings, stage, progress, solver_cls=FastHeatSolver):
+    """One heat round: factor, label every vertex/face by its hottest group, merge islands.
+
+    Returns ``(face labels (m,), solver, islands merged, HeatLabels)``; adds
+    ``factor_<stage>``, ``solve_<stage>`` and ``islands_<stage>`` to ``timings``.
+    """
     t = time.perf_counter()
     solver = solver_cls(V, F, group, L)
     timings[f"factor_{stage}"] = time.perf_counter() - t
@@ -474,88 +498,3 @@ def make_face_connected(
             break
         root = nxt
     return plabel[root][piece], merged
-
-
-#: Segmentation modes: the paper's (default, faithful) and robust mode (noise, blends).
-MODES = ("paper", "robust")
-
-
-def segment_with_mode(
-    mesh: CleanMesh,
-    mode: str = "paper",
-    theta: float | None = None,
-    eps: float | None = None,
-    *,
-    progress: Progress | None = None,
-    solver: str = "fast",
-    keep_solvers: bool = False,
-) -> Segmentation:
-    """Segment in the paper's mode or in robust mode, with each mode's own defaults.
-
-    Parameters
-    ----------
-    mesh : CleanMesh
-    mode : {"paper", "robust"}
-        ``"paper"``: :func:`segment_mesh`.  ``"robust"``:
-        :func:`igl_heatseg.robust.segment_robust` (denoised normals, curvature-class seeds,
-        part-relative eps, primitive merging; returns a ``RobustSegmentation`` with
-        ``primitive_types``).
-    theta, eps : float, optional
-        ``None`` takes the mode's default (paper: pi/20 and 0.05; robust:
-        ``ROBUST_THETA`` and ``ROBUST_EPS``).
-    progress, solver, keep_solvers
-        Passed to :func:`segment_mesh` (paper mode only).
-
-    Returns
-    -------
-    Segmentation
-
-    Raises
-    ------
-    ValueError
-        Unknown mode, or parameters out of range.
-    """
-    if mode == "paper":
-        return segment_mesh(
-            mesh,
-            THETA_DEFAULT if theta is None else theta,
-            EPS_DEFAULT if eps is None else eps,
-            progress=progress,
-            solver=solver,
-            keep_solvers=keep_solvers,
-        )
-    if mode == "robust":
-        from .robust import ROBUST_EPS, ROBUST_THETA, segment_robust
-
-        return segment_robust(
-            mesh, ROBUST_THETA if theta is None else theta, ROBUST_EPS if eps is None else eps
-        )
-    raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
-
-
-def segment(
-    V: np.ndarray,
-    F: np.ndarray,
-    theta: float = THETA_DEFAULT,
-    eps: float = EPS_DEFAULT,
-    solver: str = "fast",
-) -> np.ndarray:
-    """One-off wrapper: validate ``V, F`` and return the final face labels.
-
-    Parameters
-    ----------
-    V : (n, 3) array_like of float
-    F : (m, 3) array_like of int
-    theta, eps : float
-        See :func:`segment_mesh`.
-    solver : {"fast", "exact"}
-        See :func:`segment_mesh`.
-
-    Returns
-    -------
-    labels : (m,) int64
-        ``0..k-1``, largest segment first, in the input's face order.
-    """
-    from .checks import validate_mesh
-
-    return segment_mesh(validate_mesh(V, F), theta, eps, keep_solvers=False, solver=solver).labels

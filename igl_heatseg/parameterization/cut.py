@@ -39,9 +39,9 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
-from .checks import as_mesh_arrays
-from .errors import MeshError
-from .topology import EdgeTopology, corner_edges, corner_fans, edge_topology, face_components
+from ..mesh.checks import as_mesh_arrays
+from ..errors import CutError, MeshError
+from ..mesh.topology import EdgeTopology, corner_edges, corner_fans, edge_topology, face_components
 
 __all__ = [
     "ChartTopology",
@@ -65,14 +65,6 @@ CLOSED_ROOT_CANDIDATES: int = 4
 
 #: How many offenders a message lists.
 _SHOW = 5
-
-
-class CutError(RuntimeError):
-    """Internal failure: the automatic cut did not produce a topological disk.
-
-    Raised by :func:`cut_to_disk` after it verified its own result; this is a bug (or an input
-    the construction does not cover), not bad user input.
-    """
 
 
 @dataclass(frozen=True)
@@ -281,7 +273,7 @@ def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
     An interior edge of ``F`` whose two faces reach it through different wedge pairs in
     ``Fn`` (it was opened) becomes two boundary edges: the first face keeps the edge id, the
     second face's copy gets a new id after the old ones.  Every other edge carries over.  Same
-    edges as :func:`igl_heatseg.topology.edge_topology` of ``Fn`` up to edge numbering (``E`` is
+    edges as :func:`igl_heatseg.mesh.topology.edge_topology` of ``Fn`` up to edge numbering (``E`` is
     not sorted by row; :func:`_edge_ids` does not need it).
     """
     m = Fn.shape[0]
@@ -439,7 +431,7 @@ def cut_mesh_along_edges(
     the chart was pinched).  On a manifold chart it equals ``igl.cut_mesh`` (tested), without
     its unreferenced leftover vertices.  Note: ``igl.cut_mesh``'s mask entry ``(f, j)`` is the
     edge ``(F[f, j], F[f, (j+1) % 3])``, not the opposite-corner convention of
-    :mod:`igl_heatseg.topology`.  A cut edge whose ends both stay joined around the other side
+    :mod:`igl_heatseg.mesh.topology`.  A cut edge whose ends both stay joined around the other side
     (an isolated edge in the middle of the chart) has no effect.
 
     Parameters
@@ -629,7 +621,7 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
         raise MeshError(
             f"{name}: the chart has {before.components} edge-connected components; "
             "cut_to_disk handles one component at a time (split it with "
-            "igl_heatseg.topology.face_components first)"
+            "igl_heatseg.mesh.topology.face_components first)"
         )
     if before.is_disk:
         return _finish(V, F, topo, none, before, "none")

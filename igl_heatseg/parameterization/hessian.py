@@ -48,8 +48,8 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from .checks import as_mesh_arrays
-from .errors import MeshError
+from ..mesh.checks import as_mesh_arrays
+from ..errors import MeshError
 
 __all__ = [
     "hlle_energy",

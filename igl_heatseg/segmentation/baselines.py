@@ -28,12 +28,13 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
-from .checks import as_mesh_arrays
-from .constants import EPS_DEFAULT, THETA_DEFAULT
-from .errors import MeshError
+from ..mesh.checks import as_mesh_arrays
+from ..constants import EPS_DEFAULT, THETA_DEFAULT
+from ..errors import MeshError
 from .seeds import dihedral_deviation, face_normals, seed_groups, sharp_edges
-from .segment import face_areas
-from .topology import edge_topology
+from .paper import face_areas, make_face_connected
+from .params import check_segment_params, eps_keep
+from ..mesh.topology import edge_topology
 
 __all__ = [
     "dihedral_region_growing",
@@ -80,11 +81,6 @@ def relabel_by_area(labels: ArrayLike, area: ArrayLike) -> np.ndarray:
     return rank[inv]
 
 
-def _check_theta(theta: float) -> None:
-    if not (isinstance(theta, (int, float)) and 0 < theta <= np.pi):
-        raise MeshError(f"theta must be in (0, pi] radians, got {theta!r}")
-
-
 def dihedral_region_growing(V: ArrayLike, F: ArrayLike, theta: float = THETA_DEFAULT) -> np.ndarray:
     """Face-connected regions bounded by sharp edges (pure dihedral region growing).
 
@@ -117,7 +113,7 @@ def dihedral_region_growing(V: ArrayLike, F: ArrayLike, theta: float = THETA_DEF
     6
     """
     V, F = as_mesh_arrays(V, F, "mesh")
-    _check_theta(theta)
+    check_segment_params(theta, EPS_DEFAULT)
     m = F.shape[0]
     topo = edge_topology(F)
     _, phi = dihedral_deviation(V, F, topo)
@@ -227,12 +223,8 @@ def random_walks(
     MeshError
         Bad arrays or parameters out of range.
     """
-    from .segment import make_face_connected
-
     V, F = as_mesh_arrays(V, F, "mesh")
-    _check_theta(theta)
-    if not 0 <= eps <= 1:
-        raise MeshError(f"eps must be in [0, 1], got {eps!r}")
+    check_segment_params(theta, eps)
     n, m = V.shape[0], F.shape[0]
     topo = edge_topology(F)
     E, phi = dihedral_deviation(V, F, topo)
@@ -261,9 +253,7 @@ def random_walks(
     areas0 = np.bincount(labels0, weights=area, minlength=k0)
     gcomp = np.zeros(k0, dtype=np.int64)
     gcomp[fgroup[fgroup >= 0]] = fcomp[fgroup >= 0]
-    largest = np.zeros(ncomp)
-    np.maximum.at(largest, gcomp, areas0)
-    keep = (areas0 >= eps * largest[gcomp]) & (areas0 > 0)
+    keep = eps_keep(areas0, gcomp, eps, "largest")
     if keep.all():
         labels1, group1 = labels0, fgroup
     else:

@@ -1,9 +1,10 @@
 """polyscope scenes and headless pictures of every pipeline stage (paper Figs. 6, 11, 13–15).
 
-The scenes are built from the Python API (:func:`build_scene`) and shown interactively
-(:func:`view`, ``igl-heatseg view MESH --stage ...``) or rendered without a display
-(:func:`render`, ``igl-heatseg render MESH -o PNG``) through polyscope's EGL backend, which
-runs on Mesa's software rasterizer where no GPU is present.
+The scenes are built from results (:func:`build_scene`) and shown interactively
+(``igl-heatseg view MESH --stage ...``) or rendered without a display (:func:`render_scene`,
+``igl-heatseg render MESH -o PNG``) through polyscope's EGL backend, which runs on Mesa's
+software rasterizer where no GPU is present. This module draws; it runs no algorithm (loading
+a file and segmenting it is the command line's job, :mod:`igl_heatseg.cli.viz`).
 
 Stages (:data:`STAGES`):
 
@@ -39,8 +40,9 @@ Headless, from the command line or Python::
     igl-heatseg render data/fandisk.off -o final.png --stage final --size 1200 900
     igl-heatseg plot-areas data/fandisk.off -o areas.png
 
-    >>> from igl_heatseg import viz                                    # doctest: +SKIP
-    >>> viz.render("data/fandisk.off", "seeds.png", stage="seeds")     # doctest: +SKIP
+    >>> import igl_heatseg as ih                                         # doctest: +SKIP
+    >>> mesh = ih.load_mesh("data/fandisk.off")                          # doctest: +SKIP
+    >>> ih.viz.render_scene(mesh.V, mesh.F, ih.segment(mesh), "seeds.png", "seeds")  # doctest: +SKIP
 """
 
 from __future__ import annotations
@@ -48,7 +50,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import sys
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -58,7 +59,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .constants import EPS_DEFAULT, THETA_DEFAULT
 
 __all__ = [
     "STAGES",
@@ -82,17 +82,17 @@ __all__ = [
     "set_camera",
     "screenshot",
     "render_scene",
-    "render",
-    "view",
     "write_run_pictures",
-    "register",
+    "scene_points",
+    "CHART_STAGES",
+    "DEFAULT_SIZE",
 ]
 
 log = logging.getLogger(__name__)
 
 Stage = Literal["seeds", "initial", "final", "temperature", "charts", "checker"]
 
-#: Stages understood by :func:`build_scene`, :func:`render` and :func:`view`.
+#: Stages understood by :func:`build_scene` and :func:`render_scene`.
 STAGES: tuple[str, ...] = ("seeds", "initial", "final", "temperature", "charts", "checker")
 
 #: Stages that need the parameterization (charts).
@@ -160,7 +160,7 @@ def _polyscope():
         import polyscope as ps
     except ImportError as exc:
         raise ImportError(
-            f"igl_heatseg.viz needs polyscope, which is not installed: {INSTALL_HINT}"
+            f"igl_heatseg.viz.core needs polyscope, which is not installed: {INSTALL_HINT}"
         ) from exc
     return ps
 
@@ -525,7 +525,7 @@ def segment_boundary_edges(F: ArrayLike, labels: ArrayLike) -> np.ndarray:
 
 
 def _rgb(labels: np.ndarray, k: int | None = None) -> np.ndarray:
-    from .io import label_colors
+    from ..io.results import label_colors
 
     k = int(labels.max()) + 1 if k is None else k
     return label_colors(k)[labels].astype(np.float64) / 255.0
@@ -636,7 +636,7 @@ def show_labels(V, F, labels: ArrayLike, name: str, mesh_name: str = "mesh", ena
     V : (n, 3) float64
     F : (m, 3) int64
     labels : (m,) int
-        ``0..k-1``; colours from :func:`igl_heatseg.io.label_colors`.
+        ``0..k-1``; colours from :func:`igl_heatseg.io.meshes.label_colors`.
     name : str
         Quantity name (``"initial segmentation"``, ``"final segmentation"``).
     mesh_name : str
@@ -765,7 +765,7 @@ def show_chart_maps(V, charts, enabled: bool = True, edges: bool = True):
     V = np.asarray(V)
     placed = chart_layout(V, charts)
     k = max([c.label for c in charts], default=0) + 1
-    from .io import label_colors
+    from ..io.results import label_colors
 
     pal = label_colors(k).astype(np.float64) / 255.0
     out = []
@@ -1082,7 +1082,7 @@ def screenshot(png: str | os.PathLike, size: tuple[int, int] = DEFAULT_SIZE) -> 
     return time.perf_counter() - t
 
 
-def _scene_points(V: ArrayLike, charts, planar: bool) -> np.ndarray:
+def scene_points(V: ArrayLike, charts, planar: bool) -> np.ndarray:
     """Points the camera must see: the mesh, or the laid-out charts in the plane z = 0."""
     if not planar:
         return np.asarray(V)
@@ -1140,7 +1140,7 @@ def render_scene(
     t = time.perf_counter()
     info = build_scene(V, F, seg, stage, charts=charts, segment=segment)
     set_camera(
-        _scene_points(V, charts, info["planar"]),
+        scene_points(V, charts, info["planar"]),
         size,
         planar=info["planar"],
         direction=info["direction"],
@@ -1150,138 +1150,6 @@ def render_scene(
     log.info("rendered %s (%s) in %.2f s + %.2f s", png, stage, t_scene, t_shot)
     ps.remove_all_structures()
     return {"png": Path(png), "seconds_scene": t_scene, "seconds_screenshot": t_shot}
-
-
-def _segment_file(mesh_path, theta: float, eps: float):
-    from .io import load_mesh
-    from .segment import segment_mesh
-
-    mesh = load_mesh(mesh_path)
-    return mesh, segment_mesh(mesh, theta, eps)
-
-
-def _pipeline_file(mesh_path, theta: float, eps: float):
-    """Load, segment, cut and parameterize (``igl_heatseg.pipeline.run_pipeline``, no files)."""
-    from .io import load_mesh
-    from .pipeline import run_pipeline
-
-    mesh = load_mesh(mesh_path)
-    res = run_pipeline(mesh, None, theta, eps)
-    return mesh, res.segmentation, res.charts
-
-
-def _load(mesh_path, theta: float, eps: float, need_charts: bool):
-    if need_charts:
-        return _pipeline_file(mesh_path, theta, eps)
-    mesh, seg = _segment_file(mesh_path, theta, eps)
-    return mesh, seg, None
-
-
-def render(
-    mesh_path: str | os.PathLike,
-    png: str | os.PathLike,
-    stage: Stage = "final",
-    size: tuple[int, int] = DEFAULT_SIZE,
-    theta: float = THETA_DEFAULT,
-    eps: float = EPS_DEFAULT,
-    segment: int | None = None,
-    backend: str | None = None,
-) -> dict:
-    """Segment a mesh file and render one stage to a PNG, headless.
-
-    Parameters
-    ----------
-    mesh_path : str or path-like
-        ``.obj``/``.off``/``.ply``/``.stl``.
-    png : str or path-like
-    stage : str
-        One of :data:`STAGES`.
-    size : (width, height)
-    theta, eps : float
-        Segmentation parameters.
-    segment : int, optional
-        For ``"temperature"`` (default: the segment seen best).
-    backend : str, optional
-
-    Returns
-    -------
-    dict
-        As :func:`render_scene`, plus ``"seconds_pipeline"`` (load, segment, parameterize).
-
-    Raises
-    ------
-    MeshError
-        The file is not a valid mesh.
-    """
-    if stage not in STAGES:
-        raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
-    t = time.perf_counter()
-    mesh, seg, charts = _load(mesh_path, theta, eps, stage in CHART_STAGES)
-    t_pipe = time.perf_counter() - t
-    out = render_scene(
-        mesh.V, mesh.F, seg, png, stage, charts=charts, size=size, segment=segment, backend=backend
-    )
-    out["seconds_pipeline"] = t_pipe
-    return out
-
-
-def view(
-    mesh_path: str | os.PathLike,
-    stage: Stage = "final",
-    theta: float = THETA_DEFAULT,
-    eps: float = EPS_DEFAULT,
-    segment: int | None = None,
-    backend: str | None = None,
-    charts: bool | None = None,
-) -> None:
-    """Open polyscope's viewer on a mesh file, one stage enabled, the others a click away.
-
-    Under a headless backend (``openGL_mock``, EGL) the scene is built and one frame drawn,
-    then the function returns.
-
-    Parameters
-    ----------
-    mesh_path : str or path-like
-    stage : str
-        One of :data:`STAGES`.
-    theta, eps : float
-    segment : int, optional
-        Temperature field shown (default: the segment seen best).
-    backend : str, optional
-    charts : bool, optional
-        Parameterize to offer the chart stages; default only when ``stage`` needs it.
-
-    Raises
-    ------
-    MeshError
-        The file is not a valid mesh.
-    """
-    if stage not in STAGES:
-        raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
-    want_charts = stage in CHART_STAGES if charts is None else charts
-    mesh, seg, ch = _load(mesh_path, theta, eps, want_charts)
-    ps = init_polyscope(backend)
-    info = build_scene(
-        mesh.V,
-        mesh.F,
-        seg,
-        stage,
-        charts=ch,
-        segment=segment,
-        all_quantities=not (stage == "charts"),
-    )
-    if info["planar"]:
-        ps.set_navigation_style("planar")
-    set_camera(
-        _scene_points(mesh.V, ch, info["planar"]),
-        ps.get_window_size(),
-        planar=info["planar"],
-        direction=info["direction"],
-    )
-    if ps.is_headless():
-        ps.show(forFrames=1)
-    else:  # pragma: no cover - needs a display
-        ps.show()
 
 
 def write_run_pictures(
@@ -1356,119 +1224,3 @@ def write_run_pictures(
 
 # --------------------------------------------------------------------------------------------
 # CLI
-
-
-def register(subparsers) -> None:
-    """Add the ``view``, ``render`` and ``plot-areas`` subcommands.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        From ``parser.add_subparsers()``; each subcommand sets ``func`` (``args -> int``).
-    """
-
-    from .cli import add_segment_arguments
-
-    def common(p, with_stage=True):
-        p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl)")
-        if with_stage:
-            p.add_argument(
-                "--stage",
-                choices=STAGES,
-                default="final",
-                help="what to show (default: final segmentation)",
-            )
-            p.add_argument(
-                "--segment",
-                type=int,
-                default=None,
-                help="segment whose temperature field --stage temperature shows "
-                "(0 = largest; default: the one seen best)",
-            )
-        add_segment_arguments(p)
-
-    p = subparsers.add_parser(
-        "view",
-        help="open the polyscope viewer on one stage",
-        description="Segment MESH and show a stage in polyscope.",
-    )
-    common(p)
-    p.set_defaults(func=_cli_view, _parser=p)
-
-    p = subparsers.add_parser(
-        "render",
-        help="render a stage to a PNG without a display",
-        description="Segment MESH and render one stage headless (polyscope EGL backend).",
-    )
-    common(p)
-    p.add_argument("-o", "--output", required=True, help="PNG file to write")
-    p.add_argument(
-        "--size",
-        type=int,
-        nargs=2,
-        metavar=("W", "H"),
-        default=list(DEFAULT_SIZE),
-        help=f"picture size in pixels (default {DEFAULT_SIZE[0]} {DEFAULT_SIZE[1]})",
-    )
-    p.set_defaults(func=_cli_render, _parser=p)
-
-    p = subparsers.add_parser(
-        "plot-areas",
-        help="plot the initial segment areas with the eps line (paper Fig. 12)",
-        description="Segment MESH and plot the sorted areas of the initial segments with the "
-        "line eps * A_largest: groups below it are dropped. Use it to choose eps.",
-    )
-    common(p, with_stage=False)
-    p.add_argument("-o", "--output", required=True, help="PNG file to write")
-    p.add_argument("--linear", action="store_true", help="linear area axis (default log)")
-    p.set_defaults(func=_cli_plot_areas, _parser=p)
-
-
-def _check_params(args) -> None:
-    """Reject out-of-range options the argparse way (usage line, exit code 2)."""
-    if not 0 < args.theta <= math.pi:
-        args._parser.error(f"--theta must be in (0, pi] radians, got {args.theta}")
-    if not 0 <= args.eps <= 1:
-        args._parser.error(f"--eps must be in [0, 1], got {args.eps}")
-    if min(getattr(args, "size", (16, 16))) < 16:
-        args._parser.error(f"--size must be at least 16 16 pixels, got {args.size}")
-
-
-def _cli_view(args) -> int:
-    _check_params(args)
-    view(args.mesh, args.stage, args.theta, args.eps, segment=args.segment)
-    return 0
-
-
-def _cli_render(args) -> int:
-    _check_params(args)
-    try:
-        out = render(
-            args.mesh,
-            args.output,
-            args.stage,
-            tuple(args.size),
-            args.theta,
-            args.eps,
-            segment=args.segment,
-        )
-    except RuntimeError as exc:  # no EGL: one line, not a traceback
-        sys.stderr.write(f"igl-heatseg: error: {exc}\n")
-        return 1
-    log.info("wrote %s", out["png"])
-    return 0
-
-
-def _cli_plot_areas(args) -> int:
-    from .plots import plot_area_distribution
-
-    _check_params(args)
-    mesh, seg = _segment_file(args.mesh, args.theta, args.eps)
-    plot_area_distribution(
-        seg.initial_areas,
-        args.eps,
-        args.output,
-        log_scale=not args.linear,
-        title=f"{Path(args.mesh).name}: initial segment areas",
-    )
-    return 0

@@ -1,4 +1,4 @@
-"""Mesh readers and result writers.
+"""Mesh readers: OBJ, OFF, PLY and STL files in, a validated :class:`CleanMesh` out.
 
 The readers are our own, not libigl's: libigl's readers accept bad files silently (an OFF
 header declaring 99,999,999 vertices in a 30-byte file hangs ``igl.read_triangle_mesh``; an
@@ -7,30 +7,21 @@ holds and raises :class:`~igl_heatseg.MeshError` naming the file and the problem
 
 Supported: OBJ, OFF, PLY (ascii, binary little/big endian), STL (ascii, binary).  Faces must
 be triangles.  STL stores three vertices per face; they are merged by
-:func:`igl_heatseg.checks.validate_mesh`, which :func:`load_mesh` calls.
+:func:`igl_heatseg.mesh.checks.validate_mesh`, which :func:`load_mesh` calls.
 """
 
 from __future__ import annotations
 
-import json
 import os
 import re
 from pathlib import Path
 
 import numpy as np
 
-from .checks import CleanMesh, validate_mesh
-from .errors import MeshError
+from ..mesh.checks import CleanMesh, validate_mesh
+from ..errors import MeshError
 
-__all__ = [
-    "SUPPORTED_EXTENSIONS",
-    "read_mesh_arrays",
-    "load_mesh",
-    "write_labels",
-    "write_segmented_ply",
-    "write_report",
-    "label_colors",
-]
+__all__ = ["SUPPORTED_EXTENSIONS", "read_mesh_arrays", "load_mesh"]
 
 SUPPORTED_EXTENSIONS = (".obj", ".off", ".ply", ".stl")
 
@@ -53,7 +44,7 @@ def load_mesh(path: str | os.PathLike) -> CleanMesh:
     ------
     MeshError
         Missing or unreadable file, unknown extension, malformed content, or a mesh that
-        :func:`~igl_heatseg.checks.validate_mesh` rejects.
+        :func:`~igl_heatseg.mesh.checks.validate_mesh` rejects.
     """
     V, F = read_mesh_arrays(path)
     return validate_mesh(V, F, name=Path(path).name)
@@ -414,109 +405,3 @@ def _read_stl(data: bytes, name: str) -> tuple[np.ndarray, np.ndarray]:
             f"file has {len(data)} bytes (truncated or not an STL file)"
         )
     raise MeshError(f"{name}: too short to be an STL file ({len(data)} bytes)")
-
-
-# --------------------------------------------------------------------------------------------
-# writers
-
-
-def label_colors(k: int) -> np.ndarray:
-    """A categorical palette, distinct neighbours, deterministic.
-
-    Parameters
-    ----------
-    k : int
-        Number of labels.
-
-    Returns
-    -------
-    C : (k, 3) uint8
-        RGB colours; the first 20 are Tableau-like, then golden-ratio hues.
-    """
-    base = np.array(
-        [
-            [31, 119, 180], [255, 127, 14], [44, 160, 44], [214, 39, 40], [148, 103, 189],
-            [140, 86, 75], [227, 119, 194], [127, 127, 127], [188, 189, 34], [23, 190, 207],
-            [174, 199, 232], [255, 187, 120], [152, 223, 138], [255, 152, 150], [197, 176, 213],
-            [196, 156, 148], [247, 182, 210], [199, 199, 199], [219, 219, 141], [158, 218, 229],
-        ],
-        dtype=np.uint8,
-    )  # fmt: skip
-    if k <= len(base):
-        return base[:k].copy()
-    i = np.arange(k - len(base))
-    h = (i * 0.618033988749895) % 1.0
-    s = 0.55 + 0.35 * ((i * 7) % 3) / 2
-    v = 0.95 - 0.25 * ((i * 5) % 2)
-    hi = np.floor(h * 6).astype(int) % 6
-    f = h * 6 - np.floor(h * 6)
-    p, q, t = v * (1 - s), v * (1 - f * s), v * (1 - (1 - f) * s)
-    table = [(v, t, p), (q, v, p), (p, v, t), (p, q, v), (t, p, v), (v, p, q)]
-    rgb = np.stack([np.choose(hi, [tb[c] for tb in table]) for c in range(3)], axis=1)
-    return np.concatenate([base, (rgb * 255).round().astype(np.uint8)])
-
-
-def write_labels(path: str | os.PathLike, labels: np.ndarray) -> None:
-    """Write one integer per line.
-
-    Parameters
-    ----------
-    path : str or path-like
-    labels : (k,) int array
-    """
-    values = np.asarray(labels, dtype=np.int64).ravel().tolist()
-    text = "\n".join(map(str, values))  # 10x faster than np.savetxt on 168k labels
-    Path(path).write_text(text + "\n" if values else "")
-
-
-def write_segmented_ply(
-    path: str | os.PathLike, V: np.ndarray, F: np.ndarray, labels: np.ndarray
-) -> None:
-    """Write a binary PLY with a per-face ``label`` and per-face ``red green blue`` colour.
-
-    Parameters
-    ----------
-    path : str or path-like
-    V : (n, 3) float64
-        Written as ``double`` x, y, z.
-    F : (m, 3) int64
-    labels : (m,) int64
-        Face labels ``0..k-1``; colours from :func:`label_colors`.
-    """
-    labels = np.asarray(labels, dtype=np.int64)
-    C = label_colors(int(labels.max()) + 1 if len(labels) else 0)[labels]
-    header = (
-        "ply\nformat binary_little_endian 1.0\ncomment igl_heatseg segmentation\n"
-        f"element vertex {len(V)}\nproperty double x\nproperty double y\nproperty double z\n"
-        f"element face {len(F)}\nproperty list uchar int vertex_indices\nproperty int label\n"
-        "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
-    )
-    fdt = np.dtype(
-        [("n", "u1"), ("v", "<i4", (3,)), ("label", "<i4"), ("r", "u1"), ("g", "u1"), ("b", "u1")]
-    )
-    fa = np.zeros(len(F), dtype=fdt)
-    fa["n"] = 3
-    fa["v"] = F
-    fa["label"] = labels
-    fa["r"], fa["g"], fa["b"] = C[:, 0], C[:, 1], C[:, 2]
-    with open(path, "wb") as fh:
-        fh.write(header.encode("ascii"))
-        fh.write(np.ascontiguousarray(V, dtype="<f8").tobytes())
-        fh.write(fa.tobytes())
-
-
-def write_report(path: str | os.PathLike, report: dict) -> None:
-    """Write a JSON report (numpy scalars and arrays converted), indented."""
-
-    def conv(o):
-        if isinstance(o, np.integer):
-            return int(o)
-        if isinstance(o, np.floating):
-            return float(o)
-        if isinstance(o, np.ndarray):
-            return o.tolist()
-        if isinstance(o, Path):
-            return str(o)
-        raise TypeError(f"not JSON serialisable: {type(o)}")
-
-    Path(path).write_text(json.dumps(report, indent=2, default=conv) + "\n")

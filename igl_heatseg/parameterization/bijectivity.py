@@ -28,9 +28,9 @@ from fractions import Fraction
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .checks import as_mesh_arrays
-from .errors import MeshError
-from .topology import boundary_loops
+from ..mesh.checks import as_mesh_arrays
+from ..errors import MeshError
+from ..mesh.topology import boundary_loops
 
 __all__ = [
     "Certificate",
@@ -414,7 +414,7 @@ def certify_map(
     name : str
         Chart name used in error messages.
     loops : list of (b_i,) int64 arrays, optional
-        The boundary loops of ``F`` (:func:`igl_heatseg.topology.boundary_loops`), when the
+        The boundary loops of ``F`` (:func:`igl_heatseg.mesh.topology.boundary_loops`), when the
         caller certifies many maps of one chart (saves about a third of the time on a
         12k-face chart); computed when omitted.  Not checked: they must be ``F``'s.
 

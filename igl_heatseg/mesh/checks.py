@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .constants import DEGENERATE_FACE_TOL
-from .errors import MeshError
+from ..constants import DEGENERATE_FACE_TOL
+from ..errors import MeshError
 from .topology import corner_edges, corner_fans, edge_topology, unique_rows
 
 __all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays"]

@@ -1,0 +1,128 @@
+"""What every subcommand shares: progress on stderr, the segmentation options, loading."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ..constants import EPS_DEFAULT, THETA_DEFAULT
+from ..segmentation.params import MODES, ROBUST_EPS, ROBUST_THETA, SOLVERS
+
+__all__ = [
+    "PROGRESS_MIN_FACES",
+    "Progress",
+    "add_segment_arguments",
+    "add_solver_argument",
+    "add_progress_argument",
+    "progress_for",
+]
+
+#: Meshes with at least this many faces get a progress display on stderr by default.
+PROGRESS_MIN_FACES = 50_000
+
+
+class Progress:
+    """A minimal progress display on stderr.
+
+    On a terminal the current line is rewritten; otherwise one line is printed per stage and
+    per quarter of a long stage, so that CI logs stay short.
+
+    Parameters
+    ----------
+    enabled : bool
+    stream : file-like, optional
+        Defaults to ``sys.stderr``.
+    auto : bool
+        :meth:`sized` decides ``enabled`` from the mesh size.
+    """
+
+    def __init__(self, enabled: bool, stream=None, auto: bool = False) -> None:
+        self.enabled = enabled
+        self.auto = auto
+        self.stream = sys.stderr if stream is None else stream
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.t0 = time.perf_counter()
+        self._last: tuple[str, int] | None = None
+
+    def sized(self, n_faces: int) -> Progress:
+        """Under ``auto``, turn the display on for meshes of :data:`PROGRESS_MIN_FACES`+ faces."""
+        if self.auto:
+            self.enabled = n_faces >= PROGRESS_MIN_FACES
+        return self
+
+    def __call__(self, stage: str, fraction: float = 1.0) -> None:
+        """Report ``fraction`` (0..1) of ``stage`` done."""
+        if not self.enabled:
+            return
+        pct = int(100 * fraction)
+        step = pct if self.tty else 25 * (pct // 25)
+        if self._last == (stage, step):
+            return
+        self._last = (stage, step)
+        msg = f"[{time.perf_counter() - self.t0:6.1f}s] {stage}: {pct:3d}%"
+        if self.tty:
+            self.stream.write("\r" + msg.ljust(60) + ("\n" if pct >= 100 else ""))
+        else:
+            self.stream.write(msg + "\n")
+        self.stream.flush()
+
+
+def add_segment_arguments(p: argparse.ArgumentParser) -> None:
+    """Add ``--mode paper|robust``, ``--theta`` and ``--eps`` to a subparser.
+
+    ``--theta``/``--eps`` default to ``None``: each mode's own default, resolved by
+    :func:`igl_heatseg.segmentation.params.resolve_params` (the one place they are checked).
+    """
+    p.add_argument(
+        "--mode",
+        choices=MODES,
+        default="paper",
+        help="paper: the paper's method, faithful (default); robust: denoised normals, "
+        "curvature-class seeds, part-relative eps and primitive merging, for noisy scans "
+        "and blends (adds a primitive type per segment to report.json)",
+    )
+    p.add_argument(
+        "--theta",
+        type=float,
+        default=None,
+        help="dihedral threshold in radians; an interior edge whose face normals differ by more "
+        f"is sharp (default pi/20 = {THETA_DEFAULT:.4f}; robust mode: {ROBUST_THETA} on "
+        "denoised normals)",
+    )
+    p.add_argument(
+        "--eps",
+        type=float,
+        default=None,
+        help="area fraction: initial segments smaller than eps x the largest of their component "
+        f"lose their seeds (default {EPS_DEFAULT}; robust mode: {ROBUST_EPS} x the component's "
+        "area)",
+    )
+
+
+def add_solver_argument(p: argparse.ArgumentParser) -> None:
+    """Add ``--solver fast|exact`` to a subparser."""
+    p.add_argument(
+        "--solver",
+        choices=SOLVERS,
+        default="fast",
+        help="heat solver: fast (certified local solves, same labels; default) or exact "
+        "(one global solve per seed group: the reference, slow on noisy scans)",
+    )
+
+
+def add_progress_argument(p: argparse.ArgumentParser) -> None:
+    """Add ``--progress auto|always|never`` to a subparser."""
+    p.add_argument(
+        "--progress",
+        choices=("auto", "always", "never"),
+        default="auto",
+        help=f"progress on stderr (auto: for meshes of {PROGRESS_MIN_FACES}+ faces)",
+    )
+
+
+def progress_for(args: argparse.Namespace) -> Progress:
+    """The progress display ``--progress`` asks for; under ``auto`` call
+    :meth:`Progress.sized` once the mesh is loaded."""
+    mode = getattr(args, "progress", "auto")
+    return Progress(enabled=mode == "always", auto=mode == "auto")

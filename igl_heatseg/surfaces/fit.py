@@ -287,7 +287,7 @@ def _run_lm(make_res, X, wn, x0):
     sol = _lm(make_res(X[idx], np.sqrt(ws / max(ws.sum(), 1e-300))), x0)
     if sol is None:
         return None
-    return _lm(make_res(X, np.sqrt(wn)), sol[0], max_iter=3)
+    return _lm(make_res(X, np.sqrt(wn)), sol[0], max_iter=1)
 
 
 def _pca_normal(X, wn) -> np.ndarray:
@@ -522,8 +522,8 @@ def fit_cone(P, N, w=None) -> Surface | None:
 
     Seeds: the axis is the normal of the plane fitted to the normal vectors (a cone's normals
     lie on a small circle), and, for short arcs where that plane is ill-defined, the least
-    eigenvector of the normals' scatter (the cylinder seed); each is refined and the better
-    kept. The iterations minimise ``(r - r0) cos(psi) - h sin(psi)`` (distance to the
+    eigenvector of the normals' scatter (the cylinder seed); the one that fits better as
+    seeded is refined. The iterations minimise ``(r - r0) cos(psi) - h sin(psi)`` (distance to the
     generatrix in the axis half-plane), regular at ``psi = 0`` (a cylinder).
 
     Parameters
@@ -561,15 +561,19 @@ def fit_cone(P, N, w=None) -> Surface | None:
     X = (P - m) / sc
     Nc = N - wn @ N
     axes = (_least_eig((Nc * wn[:, None]).T @ Nc)[1], _least_eig((N * wn[:, None]).T @ N)[1])
-    best = None
-    for a0 in axes:
+    seeds = []
+    for a0 in axes:  # refine only the seed that fits better to begin with
         x0 = _cone_seed(X, N, wn, a0)
-        sol = None if x0 is None else _run_lm(_cone_res(a0), X, wn, x0)
-        if sol is not None and (best is None or sol[1] < best[1][1]):
-            best = (a0, sol)
-    if best is None:
+        if x0 is not None:
+            r = _cone_res(a0)(X, np.sqrt(wn))(x0)
+            seeds.append((float(r @ r), a0, x0))
+    if not seeds:
         return None
-    a0, (t, _) = best
+    _, a0, x0 = min(seeds, key=lambda e: e[0])
+    sol = _run_lm(_cone_res(a0), X, wn, x0)
+    if sol is None:
+        return None
+    t = sol[0]
     u0, v0 = _frame(a0)
     a, c = _chart(a0, u0, v0, t[0], t[1]), t[2] * u0 + t[3] * v0
     psi, r0 = t[5], t[4]
@@ -704,3 +708,396 @@ def _torus_res(a0):
         return res
 
     return make_res
+
+
+_FITTERS = {"plane": fit_plane, "cylinder": fit_cylinder, "cone": fit_cone,
+            "sphere": fit_sphere, "torus": fit_torus}
+
+#: fit_surface without a tolerance: this fraction of the data spread.
+DEFAULT_REL_TOL = 1e-3
+
+
+# ----------------------------------------------------------------------------- choosing a kind
+
+
+def surface_residual(surface: Surface, P, w=None) -> tuple[float, float]:
+    """Weighted RMS and largest absolute distance of points to a surface (vectorised, no fit).
+
+    Parameters
+    ----------
+    surface : Surface
+        An analytic surface (``freeform`` gives ``(nan, nan)``).
+    P : (p, 3) array_like of float64
+        Points.
+    w : (p,) array_like, optional
+        Non-negative weights (need not sum to 1); uniform by default.
+
+    Returns
+    -------
+    rms, max_dev : float
+        ``sqrt(sum w d^2 / sum w)`` and ``max |d|`` over points of positive weight.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> s = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> surface_residual(s, np.array([[0., 0, 1], [0, 0, -1], [5, 5, 0]]), w=[1, 1, 2])
+    (0.7071067811865476, 1.0)
+    """
+    d = surface.distance(np.asarray(P, dtype=np.float64))
+    if w is None:
+        return float(np.sqrt(np.mean(d * d))), float(np.max(np.abs(d)))
+    w = np.asarray(w, dtype=np.float64)
+    return float(np.sqrt((w @ (d * d)) / w.sum())), float(np.max(np.abs(d[w > 0])))
+
+
+def within_tolerance(surface: Surface, P, tol: float, w=None) -> bool:
+    """Quick check of one given surface: ``rms <= tol`` and ``max_dev <= MAX_DEV_FACTOR tol``.
+
+    The test :func:`fit_surface` applies to its candidates; for region growing (one distance
+    evaluation, no fit).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface to test.
+    P : (p, 3) array_like of float64
+        Points.
+    tol : float
+        Tolerance (model units), e.g. from :func:`fit_tolerance`.
+    w : (p,) array_like, optional
+        Non-negative weights.
+
+    Returns
+    -------
+    bool
+        False for ``freeform``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> s = Surface("sphere", {"center": np.zeros(3), "radius": 1.0})
+    >>> within_tolerance(s, np.array([[0., 0, 1.001], [1, 0, 0]]), tol=0.01)
+    True
+    """
+    rms, max_dev = surface_residual(surface, P, w)
+    return bool(rms <= tol and max_dev <= MAX_DEV_FACTOR * tol)
+
+
+def _ok(s: Surface, tol: float) -> bool:
+    return s.rms <= tol and s.max_dev <= MAX_DEV_FACTOR * tol
+
+
+def _clearly_better(s: Surface, simpler: Surface, tol: float) -> bool:
+    """The more complex ``s`` explains clearly more than the nested ``simpler`` kind."""
+    by_rms = s.rms * BEAT_FACTOR < simpler.rms and simpler.rms - s.rms > BEAT_ABS * tol
+    by_max = simpler.max_dev > MAX_DEV_FACTOR * tol >= s.max_dev * BEAT_FACTOR
+    return bool(by_rms or by_max)
+
+
+def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> Surface:
+    """The simplest adequate surface kind for one segment's samples.
+
+    Kinds are tried simplest first (plane < cylinder < cone < sphere < torus). A candidate
+    replaces the current choice only if it is *clearly* better (its RMS below the choice's by a
+    factor BEAT_FACTOR and by BEAT_ABS * tol, or it is within the max-deviation bound that the
+    choice breaks): the kinds are nested (a huge sphere is a plane, a thin cone a cylinder), so
+    a more complex kind always fits a little better and must beat the noise to be chosen. The
+    search stops at the first candidate within tolerance (``rms <= tol`` and
+    ``max_dev <= MAX_DEV_FACTOR * tol``) and returns the current choice; when none is within
+    tolerance the result is ``freeform`` (with the best candidate's rms and max_dev, or nan).
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float64
+        Points (e.g. from :func:`face_samples`).
+    N : (p, 3) array_like
+        Unit normals at the points.
+    w : (p,) array_like, optional
+        Non-negative weights (face areas).
+    tol : float, optional
+        Tolerance in model units (:func:`fit_tolerance`); default DEFAULT_REL_TOL times the
+        points' spread (RMS distance to their centroid).
+    kinds : sequence of str
+        Kinds to consider (a single kind checks that kind only); ``freeform`` in it or not, the
+        fallback is ``freeform``.
+
+    Returns
+    -------
+    Surface
+
+    Raises
+    ------
+    MeshError
+        On bad arrays, an unknown kind or a non-positive tolerance.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> U = rng.normal(size=(200, 3)); U /= np.linalg.norm(U, axis=1)[:, None]
+    >>> fit_surface(5 * U, U, tol=1e-3).kind
+    'sphere'
+    >>> P = np.c_[rng.uniform(size=(200, 2)), np.zeros(200)]
+    >>> fit_surface(P, np.tile([0., 0, 1], (200, 1)), tol=1e-3).kind
+    'plane'
+    """
+    P, N, wn = _check_inputs(P, N, w, True)
+    bad = [k for k in kinds if k not in SURFACE_KINDS]
+    if bad:
+        raise MeshError(f"kinds {tuple(kinds)} has unknown kinds {bad}; expected {SURFACE_KINDS}")
+    m, spread = _normalise(P, wn)
+    tol = DEFAULT_REL_TOL * spread if tol is None else float(tol)
+    if not (math.isfinite(tol) and tol > 0):
+        raise MeshError(f"tol must be a finite positive float, got {tol!r}")
+    chosen = best = None
+    for kind in (k for k in SURFACE_KINDS[:-1] if k in kinds):
+        s = _FITTERS[kind](P, N, wn)
+        if s is None:
+            continue
+        best = s if best is None or s.rms < best.rms else best
+        if chosen is None or _clearly_better(s, chosen, tol):
+            chosen = s
+        if _ok(s, tol):
+            return _with_area(chosen, w)
+    rms, dev = (best.rms, best.max_dev) if best is not None else (math.nan, math.nan)
+    return Surface("freeform", {"centroid": m}, rms=rms, max_dev=dev, area=_area(w))
+
+
+def _with_area(s: Surface, w) -> Surface:
+    return Surface(s.kind, s.params, rms=s.rms, max_dev=s.max_dev, area=_area(w),
+                   outward=s.outward)
+
+
+# ----------------------------------------------------------------------------- mesh helpers
+
+
+def _check_faces(faces, m: int) -> np.ndarray:
+    faces = np.asarray(faces)
+    if faces.dtype == bool:
+        if faces.shape != (m,):
+            raise MeshError(f"faces as a mask must have shape ({m},), got {faces.shape}")
+        return np.flatnonzero(faces)
+    if faces.ndim != 1 or not np.issubdtype(faces.dtype, np.integer):
+        raise MeshError(f"faces must be a 1-D integer array, got {faces.dtype} {faces.shape}")
+    if len(faces) and (faces.min() < 0 or faces.max() >= m):
+        raise MeshError(f"faces (shape {faces.shape}) must index [0, {m})")
+    return faces.astype(np.int64)
+
+
+def face_samples(V, F, faces):
+    """Samples to fit one segment: its vertices and its face centroids, with normals and weights.
+
+    Vertex normals are computed from the segment's faces only (a crease with the neighbouring
+    segment does not bend them). Weights sum to the segment's area: half on the face centroids
+    (each face's area / 2), half on the vertices (a third of the incident faces' areas / 2).
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    faces : (k,) array_like of int, or (m,) bool
+        The segment's faces.
+
+    Returns
+    -------
+    P : (q + k, 3) float64
+        The q distinct vertices of the faces, then the k face centroids.
+    N : (q + k, 3) float64
+        Unit normals (area-weighted vertex normals, face normals); zero rows with zero weight
+        where undefined (degenerate faces).
+    w : (q + k,) float64
+        Non-negative weights.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> P, N, w = face_samples(V, np.array([[0, 1, 2], [1, 3, 2]]), [0, 1])
+    >>> P.shape, (N[-1] + 0.0).tolist(), float(w.sum())
+    ((6, 3), [0.0, 0.0, 1.0], 1.0)
+    """
+    V, F = _check_mesh(V, F)
+    Fs = F[_check_faces(faces, len(F))]
+    if len(Fs) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    dbl = igl.doublearea(V, Fs)
+    FN = igl.per_face_normals(V, Fs, np.zeros(3))
+    verts = np.unique(Fs)
+    VN = igl.per_vertex_normals(V, Fs, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)[verts]
+    wv = np.bincount(Fs.ravel(), weights=np.repeat(dbl / 12.0, 3), minlength=len(V))[verts]
+    P = np.r_[V[verts], V[Fs].mean(axis=1)]
+    N = np.r_[VN, FN]
+    w = np.r_[wv, dbl / 4.0]
+    bad = ~np.all(np.isfinite(N), axis=1) | (np.abs(np.linalg.norm(N, axis=1) - 1) > 1e-6)
+    N[bad], w[bad] = 0.0, 0.0
+    return P, N, w
+
+
+def face_residuals(V, F, faces, surface: Surface) -> np.ndarray:
+    """Largest absolute distance of each face's corners and centroid to a surface.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    faces : (k,) array_like of int, or (m,) bool
+        Faces to evaluate.
+    surface : Surface
+        The segment's surface.
+
+    Returns
+    -------
+    r : (k,) float64
+        Per-face residual in model units (``nan`` for ``freeform``). Compare with
+        ``MAX_DEV_FACTOR * tol``; the centroid sees the chord error of coarse facets.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0.3]])
+    >>> s = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> face_residuals(V, np.array([[0, 1, 2]]), [0], s)
+    array([0.3])
+    """
+    V, F = _check_mesh(V, F)
+    Fs = F[_check_faces(faces, len(F))]
+    corners = V[Fs]  # (k, 3, 3)
+    pts = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
+    d = surface.distance(pts.reshape(-1, 3)).reshape(len(Fs), 4)
+    return np.max(np.abs(d), axis=1)
+
+
+def noise_level(V, F) -> float:
+    """Noise of the mesh's vertex positions (model units), near 0 on a clean tessellation.
+
+    Each vertex with at least QUAD_MIN_POINTS - 1 neighbours gets a height-field quadric
+    ``z = a x^2 + b xy + c y^2 + d x + e y + f`` fitted to itself and its 1-ring in their
+    principal-axes frame; its residual variance ``RSS / dof`` (dof = ring size - 6) is divided
+    by the median of ``chi2(dof) / dof`` and the noise is the square root of the median over the
+    vertices (robust to creases and corners, which are a minority). The 1-ring is small enough
+    that a quadric reproduces a coarsely tessellated cylinder or sphere (its vertices lie on
+    the surface; the facets' chord error is not noise), yet has residual freedom everywhere but
+    at low-valence vertices, which are skipped.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+
+    Returns
+    -------
+    float
+        Estimated standard deviation of the vertices' normal displacement (0 when no vertex has
+        a large enough ring).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.arange(8.0), np.arange(8.0))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.1 * x.ravel() ** 2]     # a clean parabolic cylinder
+    >>> i = np.arange(64).reshape(8, 8)[:-1, :-1].ravel()
+    >>> F = np.r_[np.c_[i, i + 1, i + 9], np.c_[i, i + 9, i + 8]]
+    >>> noise_level(V, F) < 1e-9
+    True
+    """
+    V, F = _check_mesh(V, F)
+    A = igl.adjacency_matrix(F).tocsr()
+    val = np.diff(A.indptr)
+    h = igl.avg_edge_length(V, F)
+    if not h > 0:
+        return 0.0
+    ratios = [_ring_quadric_ratios(V, A, val, n, h) for n in np.unique(val)
+              if n + 1 >= QUAD_MIN_POINTS]
+    ratios = np.concatenate(ratios) if ratios else np.zeros(0)
+    return float(h * math.sqrt(np.median(ratios))) if len(ratios) else 0.0
+
+
+def _ring_quadric_ratios(V, A, val, n, h):
+    """``RSS / dof / median(chi2(dof) / dof)`` of the 1-ring quadric of every vertex of
+    valence ``n`` (lengths in units of ``h``)."""
+    vs = np.flatnonzero(val == n)
+    nb = A.indices[A.indptr[vs][:, None] + np.arange(n)]
+    X = np.concatenate([V[vs][:, None], V[nb]], axis=1) / h  # (g, n + 1, 3)
+    X -= X.mean(axis=1, keepdims=True)
+    _, E = np.linalg.eigh(np.einsum("gki,gkj->gij", X, X))
+    L = np.einsum("gki,gij->gkj", X, E)  # columns: normal, minor, major tangent
+    z, x, y = L[..., 0], L[..., 2], L[..., 1]
+    B = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], axis=-1)  # (g, n + 1, 6)
+    BtB = np.einsum("gki,gkj->gij", B, B) + 1e-10 * np.eye(6)
+    coef = np.linalg.solve(BtB, np.einsum("gki,gk->gi", B, z)[..., None])[..., 0]
+    rss = np.sum((z - np.einsum("gki,gi->gk", B, coef)) ** 2, axis=1)
+    dof = n + 1 - 6
+    return rss / dof / (chi2.median(dof) / dof)
+
+
+def _chord_error(V, F) -> float:
+    """Chord (sagitta) error of the tessellation's curved facets: for each interior edge whose
+    dihedral angle ``theta`` lies in [FLAT_ANGLE, CREASE_ANGLE], a circular arc through the two
+    faces with their mean height ``c`` across the edge as chords has sagitta
+    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those."""
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    f, e = np.nonzero(TT > np.arange(len(F))[:, None])  # each interior edge once
+    g = TT[f, e]
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    theta = np.arccos(np.clip(np.einsum("ij,ij->i", FN[f], FN[g]), -1.0, 1.0))
+    keep = (theta >= FLAT_ANGLE) & (theta <= CREASE_ANGLE)
+    if not np.any(keep):
+        return 0.0
+    f, e, g, theta = f[keep], e[keep], g[keep], theta[keep]
+    length = np.linalg.norm(V[F[f, (e + 1) % 3]] - V[F[f, e]], axis=1)
+    dbl = igl.doublearea(V, F)
+    c = 0.5 * (dbl[f] + dbl[g]) / np.maximum(length, 1e-300)
+    return float(np.quantile(0.5 * c * np.tan(theta / 4.0), CHORD_QUANTILE))
+
+
+def fit_tolerance(V, F, noise: float | None = None) -> float:
+    """Fit tolerance of a mesh, from its own noise, tessellation and size.
+
+    ``tol = sqrt((K_NOISE * noise)^2 + (K_CHORD * chord)^2) + K_FLOOR * mean_edge``
+
+    * ``noise`` (:func:`noise_level`) — a fit's residual on noisy samples is about the noise;
+    * ``chord`` — the sagitta of the curved facets: a cylinder of radius r tessellated with
+      facets of width c has its vertices on it but its face centroids up to
+      ``r (1 - cos(c / 2r))`` inside, which a fit must accept (see :func:`_chord_error`);
+    * ``K_FLOOR * mean_edge`` — keeps a perfect mesh's tolerance above round-off.
+
+    Every term is a length of the mesh, so the tolerance scales with the mesh (scaled by 1000,
+    the tolerance is 1000 times larger) and no constant is in model units.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    noise : float, optional
+        Noise level if known (model units); estimated by :func:`noise_level` otherwise.
+
+    Returns
+    -------
+    float
+        Tolerance (model units) for :func:`fit_surface` and :func:`within_tolerance`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> round(fit_tolerance(V, F, noise=0.01), 5)   # 2.5 * noise + 1e-3 * mean edge length
+    0.02608
+    """
+    V, F = _check_mesh(V, F)
+    if noise is None:
+        noise = noise_level(V, F)
+    elif not (math.isfinite(noise) and noise >= 0):
+        raise MeshError(f"noise must be a finite float >= 0, got {noise!r}")
+    chord = _chord_error(V, F)
+    h = igl.avg_edge_length(V, F)
+    return float(math.hypot(K_NOISE * noise, K_CHORD * chord) + K_FLOOR * h)

@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..io import load_mesh, write_run
+from ..io import atomic_dir, load_mesh, write_run
 from ..pipeline import run_pipeline
 from .common import add_progress_argument, add_segment_arguments, add_solver_argument, progress_for
 
@@ -69,10 +69,10 @@ def run(args: argparse.Namespace) -> int:
         cut_paths=args.cut_path or [],
         progress=progress,
     )
-    out = Path(args.out)
-    pictures = write_pictures(out, res) if args.pictures else None
     extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
-    report = write_run(out, res, extra, t_start=t0, pictures=pictures)
+    with atomic_dir(args.out) as tmp:
+        pictures = write_pictures(tmp, res) if args.pictures else None
+        report = write_run(tmp, res, extra, t_start=t0, pictures=pictures)
     s = report["parameterization"]
     sys.stderr.write(
         f"{Path(args.mesh).name}: {res.segmentation.num_segments} segments, "

@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..io import load_mesh, write_segmentation
+from ..io import atomic_dir, load_mesh, write_segmentation
 from ..segmentation import segment_with_mode
 from .common import add_progress_argument, add_segment_arguments, add_solver_argument, progress_for
 
@@ -27,7 +27,8 @@ def run(args: argparse.Namespace) -> int:
     )
     out = Path(args.out)
     extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
-    report = write_segmentation(out, mesh, seg, extra, t_start=t0)
+    with atomic_dir(out) as tmp:
+        report = write_segmentation(tmp, mesh, seg, extra, t_start=t0)
     progress("done", 1.0)
     print(
         f"{Path(args.mesh).name}: {report['faces']} faces, {report['initial_groups']} initial "

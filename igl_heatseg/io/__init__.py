@@ -7,6 +7,8 @@ problem. Imports ``mesh`` only. A new format goes into ``meshes.py`` (readers) o
 
 from .meshes import SUPPORTED_EXTENSIONS, load_mesh, read_mesh_arrays
 from .results import (
+    atomic_dir,
+    is_complete,
     label_colors,
     write_atlas_obj,
     write_chart_obj,
@@ -29,4 +31,6 @@ __all__ = [
     "write_run",
     "write_chart_obj",
     "write_atlas_obj",
+    "atomic_dir",
+    "is_complete",
 ]

@@ -6,8 +6,11 @@ vertex order (a :class:`~igl_heatseg.mesh.CleanMesh` keeps the map back).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import shutil
+import tempfile
 import time
 from pathlib import Path
 
@@ -24,6 +27,9 @@ __all__ = [
     "write_report",
     "write_segmentation",
     "write_run",
+    "atomic_dir",
+    "is_complete",
+    "COMPLETE_MARKER",
     "write_chart_obj",
     "write_atlas_obj",
 ]
@@ -356,3 +362,70 @@ def write_run(
         timings["pictures"] = pictures["seconds"]
     report["timings"] = timings
     return write_segmentation(out, result.mesh, result.segmentation, report, t_start=t_start)
+
+
+#: Written last into an output folder by :func:`atomic_dir`: its presence means "complete".
+COMPLETE_MARKER = "report.json"
+
+
+def is_complete(out_dir: str | os.PathLike) -> bool:
+    """True when ``out_dir`` holds a finished result (written through :func:`atomic_dir`)."""
+    return (Path(out_dir) / COMPLETE_MARKER).is_file()
+
+
+@contextlib.contextmanager
+def atomic_dir(out_dir: str | os.PathLike):
+    """Write a result folder atomically: into a temporary sibling, renamed when complete.
+
+    An interrupted or failed job leaves no folder that looks finished: the temporary folder is
+    removed on an exception, and ``out_dir`` appears (replacing an older one) only after the
+    block ends without one.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        The final folder. Its parent is created; it must not be an existing file.
+
+    Yields
+    ------
+    tmp : pathlib.Path
+        The folder to write into.
+
+    Raises
+    ------
+    MeshError
+        ``out_dir`` is an existing file, or its parent cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> root = pathlib.Path(tempfile.mkdtemp())
+    >>> with atomic_dir(root / "out") as tmp:
+    ...     _ = (tmp / "report.json").write_text("{}")
+    >>> sorted(p.name for p in (root / "out").iterdir())
+    ['report.json']
+    """
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise MeshError(f"{out}: output path is a file, not a folder")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes 0700; the result gets the usual mode
+    except OSError as exc:
+        raise MeshError(f"{out}: cannot write the output folder ({exc.strerror or exc})") from None
+    try:
+        yield tmp
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    old = None
+    if out.exists():
+        old = out.parent / f".{out.name}.{os.getpid()}.old"
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(out, old)
+    os.replace(tmp, out)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)

@@ -58,6 +58,10 @@ MIN_EDGE_SAMPLES = 24
 #: was trimmed wrongly (complement chosen, loop lost) and is faceted instead.
 FACE_AREA_SLACK = 0.2
 
+#: Sewing tolerance over the largest gap between a faceted patch's border chords and the
+#: neighbouring face's edge curve (the sagitta of the chords plus margin).
+FACET_GAP_FACTOR = 1.5
+
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
 MIN_TOL_REL = 1e-7
@@ -210,6 +214,10 @@ def _edge(chain, V, pos, projs, vertices, ctx, snap):
         P[1:-1] = np.where(ok[:, None], X, P[1:-1])
     snap[chain.verts] = P[orig]
     curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
+    if any(s >= 0 and projs[s] is None for s in (chain.left, chain.right)):
+        Q = snap[chain.verts]  # a faceted neighbour's border: chords against this curve
+        gap = geometry.curve_distance(curve, 0.5 * (Q[1:] + Q[:-1])).max(initial=0.0)
+        ctx["facet_gap"] = max(ctx.get("facet_gap", 0.0), float(gap))
     v0, v1 = vertices[int(chain.verts[0])], vertices[int(chain.verts[-1])]
     builder = ctx["builder"]
     for vid, t in ((int(chain.verts[0]), t0), (int(chain.verts[-1]), t1)):
@@ -274,7 +282,8 @@ def _tolerances(V, F, surfaces, tol):
 def _sew_tolerance(ctx, devs) -> float:
     """Sewing closes gaps between built faces (curve error) and faceted patches (whose
     borders are the mesh polylines snapped onto the good neighbour's surface): a few curve
-    tolerances plus the deviation of the worst built surface, never above half an edge."""
+    tolerances or twice the deviation of the worst built surface, never above half an edge
+    (raised later to cover the chords of faceted borders, :data:`FACET_GAP_FACTOR`)."""
     dev = max([d for d in devs if np.isfinite(d)], default=0.0)
     return float(min(max(4 * ctx["curve_tol"], 2.0 * dev), 0.5 * ctx["mean_edge"]))
 
@@ -398,6 +407,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
         progress("edges", i / max(len(graph.chains), 1))
         edges.append(_edge(ch, V, pos, projs, vertices, ctx, snap))
     timings["edges"] = time.perf_counter() - t
+    ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
     faces, status = [], []
     areas = _segment_areas(V, F, labels, k)

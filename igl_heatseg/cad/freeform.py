@@ -1,8 +1,8 @@
 """Freeform segments: a UV chart and a least-squares B-spline surface over it.
 
-The chart (given, or harmonic onto the unit disk when the segment is a disk) is sampled on a
+The chart (given, or LSCM / harmonic onto the unit disk when the segment is a disk) is sampled on a
 regular (u, v) grid: grid points inside the chart take the barycentric interpolation of the
-3D vertex positions of the chart triangle holding them, the others a biharmonic extension over
+3D vertex positions of the chart triangle holding them, the others a thin-plate extension over
 the grid (smooth, continuing the slopes at the chart border).  The grid is approximated by
 ``GeomAPI_PointsToBSplineSurface`` with iso-parametric parameters, so grid (u, v) maps
 linearly to the surface parameters and the fit error is measured at every mesh vertex.
@@ -28,11 +28,16 @@ from OCP.GeomAbs import GeomAbs_Shape  # noqa: E402
 from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface  # noqa: E402
 from OCP.gp import gp_Pnt  # noqa: E402
 
-from .geometry import DEG_MAX, DEG_MIN  # noqa: E402
+from .geometry import DEG_MIN  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["disk_chart", "freeform_surface"]
+
+#: Highest degree of a freeform patch: cubic; higher degrees let the approximation meet its
+#: tolerance at the grid points while oscillating between them (measured: errors of 3 units
+#: at mesh vertices of a unit patch with degree up to 8).
+SURF_DEG_MAX = 3
 
 #: Grid sizes tried in turn for a freeform patch; the first one meeting the tolerance is kept.
 FREEFORM_GRIDS = (12, 20, 32, 48, 64)
@@ -49,7 +54,7 @@ BARY_EPS = 1e-9
 
 
 def disk_chart(V: np.ndarray, F: np.ndarray):
-    """Harmonic map of a disk-like mesh onto the unit disk, or None when it is not a disk.
+    """A bijective chart of a disk-like mesh (LSCM, else harmonic onto the unit disk).
 
     Parameters
     ----------
@@ -69,15 +74,38 @@ def disk_chart(V: np.ndarray, F: np.ndarray):
     bnd = igl.boundary_loop(F)
     if len(bnd) < 3:
         return None
-    bc = igl.map_vertices_to_circle(V, bnd)
-    UV = igl.harmonic(V, F, bnd, bc, 1)
+    far = bnd[int(np.argmax(np.linalg.norm(V[bnd] - V[bnd[0]], axis=1)))]
+    scale = float(np.linalg.norm(V[far] - V[bnd[0]]))
+    UV, _ = igl.lscm(V, F, np.array([bnd[0], far]), np.array([[0.0, 0.0], [scale, 0.0]]))
+    UV = _orient(_align(UV), F)
+    if UV is None:  # LSCM folded: Tutte-like harmonic map onto the disk is bijective
+        UV = _orient(igl.harmonic(V, F, bnd, igl.map_vertices_to_circle(V, bnd), 1), F)
+    return UV
+
+
+def _align(UV: np.ndarray) -> np.ndarray:
+    """Rotate a chart to its minimum-area bounding rectangle (less extension outside it)."""
+    from scipy.spatial import ConvexHull
+
+    H = UV[ConvexHull(UV).vertices]
+    E = np.roll(H, -1, axis=0) - H
+    best, best_area = UV, np.inf
+    for ang in np.arctan2(E[:, 1], E[:, 0]):
+        c, s = np.cos(-ang), np.sin(-ang)
+        R = UV @ np.array([[c, s], [-s, c]])
+        area = np.prod(R.max(axis=0) - R.min(axis=0))
+        if area < best_area:
+            best, best_area = R, area
+    return best
+
+
+def _orient(UV, F):
+    """UV with positive triangle areas (mirrored if all negative), or None when folded."""
     area = _signed_areas(UV, F)
     if np.all(area < 0):
-        UV[:, 0] *= -1.0
+        UV = UV * np.array([-1.0, 1.0])
         area = -area
-    if not np.all(area > 0):
-        return None
-    return UV
+    return UV if np.all(area > 0) else None
 
 
 def _signed_areas(UV, F):
@@ -106,11 +134,15 @@ def _locate(UV, F, Q):
     return tri, w
 
 
-def _grid_laplacian(g: int) -> sp.csr_matrix:
-    """Graph Laplacian of a g x g grid (4-neighbours)."""
-    d = sp.diags([np.ones(g - 1), np.ones(g - 1)], [-1, 1], shape=(g, g))
-    A = sp.kron(sp.identity(g), d) + sp.kron(d, sp.identity(g))
-    return (sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A).tocsr()
+def _thin_plate(g: int) -> sp.csr_matrix:
+    """Thin-plate energy matrix of a g x g grid (second differences; linear functions are in
+    its null space, so the extension continues the chart's slopes instead of flattening)."""
+    d1 = sp.diags([-np.ones(g - 1), np.ones(g - 1)], [0, 1], shape=(g - 1, g))
+    d2 = sp.diags([np.ones(g - 2), -2 * np.ones(g - 2), np.ones(g - 2)], [0, 1, 2],
+                  shape=(g - 2, g))
+    eye = sp.identity(g)
+    duu, dvv, duv = sp.kron(d2, eye), sp.kron(eye, d2), sp.kron(d1, d1)
+    return (duu.T @ duu + dvv.T @ dvv + 2 * duv.T @ duv).tocsr()
 
 
 def _grid_points(V, F, UV, g, box):
@@ -123,8 +155,7 @@ def _grid_points(V, F, UV, g, box):
     X = np.zeros((len(Q), 3))
     X[inside] = np.einsum("pk,pkd->pd", w[inside], V[F[tri[inside]]])
     if not inside.all():
-        L = _grid_laplacian(g)
-        Qm = (L.T @ L).tocsr()
+        Qm = _thin_plate(g)
         out = np.flatnonzero(~inside)
         kn = np.flatnonzero(inside)
         A = Qm[out][:, out].tocsc()
@@ -140,7 +171,7 @@ def _approximate(grid: np.ndarray, tol: float):
             x = grid[i, j]
             arr.SetValue(i + 1, j + 1, gp_Pnt(float(x[0]), float(x[1]), float(x[2])))
     fit = GeomAPI_PointsToBSplineSurface(arr, Approx_ParametrizationType.Approx_IsoParametric,
-                                         DEG_MIN, DEG_MAX, GeomAbs_Shape.GeomAbs_C2, float(tol))
+                                         DEG_MIN, SURF_DEG_MAX, GeomAbs_Shape.GeomAbs_C2, float(tol))
     if not fit.IsDone():
         return None
     return fit.Surface()

@@ -29,7 +29,11 @@ from OCP.Geom import (  # noqa: E402
     Geom_ToroidalSurface,
 )
 from OCP.GeomAbs import GeomAbs_Shape  # noqa: E402
-from OCP.GeomAPI import GeomAPI_PointsToBSpline, GeomAPI_ProjectPointOnSurf  # noqa: E402
+from OCP.GeomAPI import (  # noqa: E402
+    GeomAPI_PointsToBSpline,
+    GeomAPI_ProjectPointOnCurve,
+    GeomAPI_ProjectPointOnSurf,
+)
 from OCP.GeomLProp import GeomLProp_SLProps  # noqa: E402
 from OCP.gp import gp_Ax2, gp_Ax3, gp_Dir, gp_Pnt  # noqa: E402
 
@@ -37,7 +41,7 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["occ_surface", "Projector", "onto_surfaces", "edge_curve"]
+__all__ = ["occ_surface", "Projector", "onto_surfaces", "edge_curve", "curve_distance"]
 
 #: Singular values of the stacked surface normals below this fraction of the largest are
 #: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
@@ -272,3 +276,13 @@ def edge_curve(P: np.ndarray, tol: float, scale: float):
                                   float(tol))
     curve = fit.Curve()
     return curve, curve.FirstParameter(), curve.LastParameter()
+
+
+def curve_distance(curve, P: np.ndarray) -> np.ndarray:
+    """Distance ``(p,)`` of points ``P (p, 3)`` to an OCC curve (``inf`` if projection fails)."""
+    out = np.full(len(P), np.inf)
+    for i, q in enumerate(P):
+        proj = GeomAPI_ProjectPointOnCurve(_pnt(q), curve)
+        if proj.NbPoints() > 0:
+            out[i] = proj.LowerDistance()
+    return out

@@ -16,9 +16,10 @@ from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
 from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
 from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.TopoDS import TopoDS  # noqa: E402
+from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
-from .fidelity import count_free_edges  # noqa: E402
+from .fidelity import count_free_edges, faces_of  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
@@ -31,6 +32,16 @@ def _shells(shape) -> list:
         out.append(TopoDS.Shell(ex.Current()))
         ex.Next()
     return out
+
+
+def _shell_of(faces):
+    shell = TopoDS_Shell()
+    builder = BRep_Builder()
+    builder.MakeShell(shell)
+    for f in faces:
+        builder.Add(shell, f)
+    shell.Closed(count_free_edges(shell) == 0)
+    return shell
 
 
 def _unify(shape):
@@ -95,6 +106,8 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
         shape = _unify(shape)
     info = {"free_edges_after_sewing": count_free_edges(shape), "solid": False}
     shells = _shells(shape)
+    if not shells:  # sewing one face returns the face
+        shells = [_shell_of(faces_of(shape))]
     if closed and len(shells) == 1 and info["free_edges_after_sewing"] == 0:
         solid = _solid(shells[0])
         if solid is not None and BRepCheck_Analyzer(solid).IsValid():

@@ -1,0 +1,267 @@
+"""CAD stage: analytic meshes with exact (or least-squares) surfaces to B-Rep and STEP."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import igl
+import numpy as np
+import pytest
+
+pytest.importorskip("OCP")
+
+from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
+from OCP.GeomAbs import GeomAbs_SurfaceType  # noqa: E402
+
+from igl_heatseg.cad import brep_fidelity, build_brep, read_step, write_step  # noqa: E402
+from igl_heatseg.cad.fidelity import faces_of  # noqa: E402
+from igl_heatseg.errors import MeshError  # noqa: E402
+from igl_heatseg.surfaces.model import Surface  # noqa: E402
+
+Z = np.array([0.0, 0.0, 1.0])
+
+
+# --------------------------------------------------------------------------- meshes
+
+
+def box_mesh(n: int = 4, half: float = 1.0):
+    """Closed cube [-half, half]^3, n x n quads per side; labels = side; outward."""
+    t = np.linspace(-half, half, n + 1)
+    u, v = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    Fg = np.r_[np.c_[a, b, c], np.c_[a, c, d]]
+    one = np.full_like(u, half)
+    sides = [np.c_[u, v, one], np.c_[v, u, -one], np.c_[one, u, v], np.c_[-one, v, u],
+             np.c_[v, one, u], np.c_[u, -one, v]]
+    V = np.vstack(sides)
+    F = np.vstack([Fg + i * len(u) for i in range(6)])
+    labels = np.repeat(np.arange(6), len(Fg))
+    V, _, _, F = igl.remove_duplicate_vertices(V, F, 1e-9)
+    return V, F.astype(np.int64), labels
+
+
+def box_planes(half: float = 1.0):
+    normals = [Z, -Z, [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]]
+    return [Surface("plane", {"point": half * np.asarray(n, float), "normal": np.asarray(n, float)})
+            for n in normals]
+
+
+def revolve(profile, seg, n_around: int = 48):
+    """Surface of revolution about z of an (r, z) profile polyline.
+
+    Profile points with r == 0 become poles (triangle fans). ``seg[i]`` labels the band
+    between profile points i and i+1. A closed profile (first == last) gives a torus-like
+    surface. Oriented outward.
+    """
+    P = np.asarray(profile, float)
+    closed = np.allclose(P[0], P[-1])
+    if closed:
+        P = P[:-1]
+    th = np.linspace(0, 2 * np.pi, n_around, endpoint=False)
+    V, ring = [], []
+    for r, z in P:
+        if r == 0:
+            ring.append(np.full(n_around, len(V)))
+            V.append([0.0, 0.0, z])
+        else:
+            ring.append(len(V) + np.arange(n_around))
+            V.extend(np.c_[r * np.cos(th), r * np.sin(th), np.full(n_around, z)].tolist())
+    F, L = [], []
+    m = len(P) if closed else len(P) - 1
+    for i in range(m):
+        r0, r1 = ring[i], ring[(i + 1) % len(P)]
+        for j in range(n_around):
+            k = (j + 1) % n_around
+            for tri in ((r0[j], r0[k], r1[k]), (r0[j], r1[k], r1[j])):
+                if len(set(tri)) == 3:
+                    F.append(tri)
+                    L.append(seg[i])
+    V, F = np.array(V), np.array(F, np.int64)
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() < 0:
+        F = F[:, ::-1]
+    return V, F, np.array(L, np.int64)
+
+
+def polyline(points, n):
+    """Points along a polyline, n segments per leg."""
+    out = [points[0]]
+    for p, q in zip(points[:-1], points[1:]):
+        for t in np.linspace(0, 1, n + 1)[1:]:
+            out.append(tuple((1 - t) * np.asarray(p) + t * np.asarray(q)))
+    return out
+
+
+def plane_fit(P):
+    """Least-squares plane (centroid, unit normal) of points."""
+    c = P.mean(axis=0)
+    return c, np.linalg.svd(P - c)[2][2]
+
+
+def face_types(shape):
+    return sorted(BRepAdaptor_Surface(f).GetType().name for f in faces_of(shape))
+
+
+# --------------------------------------------------------------------------- tests
+
+
+def test_cube_six_planes_closed_solid():
+    V, F, labels = box_mesh(4)
+    res = build_brep(V, F, labels, box_planes())
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["faces"] == 6 and fid["faces_by_type"]["plane"]["count"] == 6
+    assert abs(fid["volume"] - 8.0) / 8.0 < 1e-6
+    assert fid["hausdorff_rel"] < 1e-6
+    assert all(f["status"] == "built" for f in res.faces)
+    json.dumps(res.to_report())
+
+
+def test_capped_cylinder_three_faces_right_radius():
+    R, H = 1.5, 2.0
+    prof = polyline([(0, 0), (R, 0)], 3) + polyline([(R, 0), (R, H)], 4)[1:] \
+        + polyline([(R, H), (0, H)], 3)[1:]
+    seg = [0] * 3 + [1] * 4 + [2] * 3
+    V, F, labels = revolve(prof, seg)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": R}),
+             Surface("plane", {"point": H * Z, "normal": Z})]
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 3
+    cyl = [f for f in faces_of(res.shape)
+           if BRepAdaptor_Surface(f).GetType() == GeomAbs_SurfaceType.GeomAbs_Cylinder]
+    assert len(cyl) == 1
+    assert BRepAdaptor_Surface(cyl[0]).Cylinder().Radius() == pytest.approx(R, rel=1e-12)
+    assert fid["volume"] == pytest.approx(math.pi * R**2 * H, rel=1e-6)
+    assert fid["hausdorff_rel"] < 1e-2  # chordal error of the 48-gon mesh
+
+
+def test_cone_frustum():
+    R1, R2, H = 1.0, 0.5, 1.0
+    prof = polyline([(0, 0), (R1, 0), (R2, H), (0, H)], 3)
+    seg = [0] * 3 + [1] * 3 + [2] * 3
+    V, F, labels = revolve(prof, seg)
+    half = math.atan((R1 - R2) / H)
+    apex = np.array([0, 0, R1 * H / (R1 - R2)])
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cone", {"apex": apex, "axis": -Z, "half_angle": half}),
+             Surface("plane", {"point": H * Z, "normal": Z})]
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 3
+    assert "GeomAbs_Cone" in face_types(res.shape)
+    exact = math.pi * H / 3 * (R1**2 + R1 * R2 + R2**2)
+    assert fid["volume"] == pytest.approx(exact, rel=1e-6)
+
+
+def test_torus_ring():
+    R, r = 2.0, 0.5
+    phi = np.linspace(0, 2 * np.pi, 25)
+    prof = np.c_[R + r * np.cos(phi), r * np.sin(phi)]
+    V, F, labels = revolve(prof, [0] * 24)
+    surfs = [Surface("torus", {"center": np.zeros(3), "axis": Z, "major_radius": R,
+                               "minor_radius": r})]
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 1
+    assert face_types(res.shape) == ["GeomAbs_Torus"]
+    assert fid["volume"] == pytest.approx(2 * math.pi**2 * R * r**2, rel=1e-6)
+
+
+def test_freeform_height_field_one_bspline_face():
+    n = 24
+    t = np.linspace(0, 1, n + 1)
+    x, y = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
+    V = np.c_[x, y, 0.08 * np.sin(2 * np.pi * x) * np.cos(np.pi * y) + 0.05 * x * y]
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), \
+        idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    surfs = [Surface("freeform", {"centroid": V.mean(axis=0)})]
+    tol = 2e-3
+    res = build_brep(V, F, np.zeros(len(F), np.int64), surfs, tol=tol)
+    fid = res.fidelity
+    assert res.faces[0]["status"] == "built", res.faces
+    assert fid["valid"] and fid["faces"] == 1 and fid["solids"] == 0
+    assert face_types(res.shape) == ["GeomAbs_BSplineSurface"]
+    assert fid["hausdorff"] < 2 * tol
+    assert fid["free_edges"] > 0  # an open patch
+
+
+def test_noisy_cube_still_closes():
+    V, F, labels = box_mesh(6)
+    rng = np.random.default_rng(3)
+    V = V + rng.normal(scale=0.01, size=V.shape)
+    surfs = []
+    for a in range(6):
+        vid = np.unique(F[labels == a])
+        c, nrm = plane_fit(V[vid])
+        if nrm @ box_planes()[a].params["normal"] < 0:
+            nrm = -nrm
+        d = np.abs((V[vid] - c) @ nrm)
+        surfs.append(Surface("plane", {"point": c, "normal": nrm}, max_dev=float(d.max())))
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert all(f["status"] == "built" for f in res.faces)
+    assert fid["volume_rel_error"] < 0.02
+    assert fid["hausdorff_rel"] < 0.02
+
+
+def test_step_round_trip(tmp_path):
+    V, F, labels = box_mesh(3)
+    res = build_brep(V, F, labels, box_planes())
+    path = write_step(res.shape, tmp_path / "cube.step")
+    text = open(path).read()
+    assert "AUTOMOTIVE_DESIGN" in text.upper() and "MILLI" in text.upper()
+    back = read_step(path)
+    fid = brep_fidelity(back, V, F)
+    assert fid["faces"] == 6 and fid["valid"] and fid["solids"] == 1
+    assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
+
+
+def test_impossible_fit_is_faceted_and_reported(tmp_path):
+    V, F, labels = box_mesh(3)
+    surfs = box_planes()
+    surfs[2] = Surface("plane", {"point": np.array([3.0, 0, 0]), "normal": np.array([1.0, 0, 0])})
+    res = build_brep(V, F, labels, surfs)
+    bad = res.not_built
+    assert [f["index"] for f in bad] == [2] and "deviates" in bad[0]["reason"]
+    fid = res.fidelity
+    # the 18 faceted triangles are coplanar: UnifySameDomain merges them into one plane
+    assert fid["faces"] == 6 and fid["free_edges"] == 0 and fid["valid"] and fid["solids"] == 1
+    assert fid["volume"] == pytest.approx(8.0, rel=1e-6)
+    assert read_step(write_step(res.shape, tmp_path / "partial.step")) is not None
+    assert res.to_report()["not_built"] == [2]
+
+
+def test_wrong_cylinder_gives_faceted_side_in_a_closed_solid(tmp_path):
+    R, H = 1.5, 2.0
+    prof = polyline([(0, 0), (R, 0)], 2) + polyline([(R, 0), (R, H)], 2)[1:] \
+        + polyline([(R, H), (0, H)], 2)[1:]
+    V, F, labels = revolve(prof, [0] * 2 + [1] * 2 + [2] * 2, n_around=32)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": 3 * R}),
+             Surface("plane", {"point": H * Z, "normal": Z})]
+    res = build_brep(V, F, labels, surfs)
+    assert res.to_report()["not_built"] == [1]
+    fid = res.fidelity
+    # 128 faceted triangles; coplanar ones (each column of the 32-gon prism) are unified
+    assert fid["faces"] == 2 + 32
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["volume_rel_error"] < 1e-2  # round caps sewn to a 32-gon prism side
+    assert len(faces_of(read_step(write_step(res.shape, tmp_path / "p.step")))) == fid["faces"]
+
+
+def test_bad_input_raises_mesh_error():
+    V, F, labels = box_mesh(2)
+    with pytest.raises(MeshError, match="labels"):
+        build_brep(V, F, labels[:-1], box_planes())
+    with pytest.raises(MeshError, match="0..5"):
+        build_brep(V, F, labels + 1, box_planes())
+    with pytest.raises(MeshError, match="V must be"):
+        build_brep(V[:, :2], F, labels, box_planes())

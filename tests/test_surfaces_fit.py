@@ -1,0 +1,321 @@
+"""Tests of igl_heatseg.surfaces.fit: analytic samples of every kind (exact, noisy, small
+patches, rigid motions and scales), kind selection, degenerate input, noise level and
+tolerance on tessellated meshes, and the Surface distance / projection round trip."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from igl_heatseg.errors import MeshError
+from igl_heatseg.surfaces.fit import (
+    face_residuals,
+    face_samples,
+    fit_cone,
+    fit_cylinder,
+    fit_plane,
+    fit_sphere,
+    fit_surface,
+    fit_tolerance,
+    fit_torus,
+    noise_level,
+    surface_residual,
+    within_tolerance,
+)
+from igl_heatseg.surfaces.model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
+
+EXAMPLES = settings(max_examples=12, deadline=None)
+
+
+# ----------------------------------------------------------------------------- samplers
+# Each returns points P and unit outward normals N of a patch in canonical position
+# (axis z, centre / apex at the origin), from a parameter grid with jitter.
+
+
+def _grid(rng, n, lo0, hi0, lo1, hi1):
+    a = rng.uniform(lo0, hi0, n)
+    b = rng.uniform(lo1, hi1, n)
+    return a, b
+
+
+def plane_patch(rng, n=400, size=1.0):
+    x, y = _grid(rng, n, -size, size, -size, size)
+    return np.c_[x, y, 0 * x], np.tile([0.0, 0.0, 1.0], (n, 1))
+
+
+def cylinder_patch(rng, radius=1.0, arc=2 * np.pi, height=2.0, n=400):
+    t, z = _grid(rng, n, 0, arc, 0, height)
+    U = np.c_[np.cos(t), np.sin(t), 0 * t]
+    return radius * U + np.c_[0 * t, 0 * t, z], U
+
+
+def cone_patch(rng, half_angle=0.4, arc=2 * np.pi, s0=1.0, s1=2.0, n=400):
+    """Points at generatrix length s in [s0, s1] from the apex."""
+    t, s = _grid(rng, n, 0, arc, s0, s1)
+    ca, sa = math.cos(half_angle), math.sin(half_angle)
+    U = np.c_[np.cos(t), np.sin(t), 0 * t]
+    P = s[:, None] * (sa * U + ca * np.array([0, 0, 1.0]))
+    return P, ca * U - sa * np.array([0, 0, 1.0])
+
+
+def sphere_patch(rng, radius=1.0, polar=np.pi, n=400):
+    """Cap of polar half-angle ``polar`` around +z (np.pi: the whole sphere)."""
+    t, c = _grid(rng, n, 0, 2 * np.pi, math.cos(polar), 1.0)
+    s = np.sqrt(1 - c * c)
+    U = np.c_[s * np.cos(t), s * np.sin(t), c]
+    return radius * U, U
+
+
+def torus_patch(rng, R=3.0, r=1.0, u_arc=2 * np.pi, v0=0.0, v1=2 * np.pi, n=600):
+    u, v = _grid(rng, n, 0, u_arc, v0, v1)
+    Nt = np.c_[np.cos(v) * np.cos(u), np.cos(v) * np.sin(u), np.sin(v)]
+    return R * np.c_[np.cos(u), np.sin(u), 0 * u] + r * Nt, Nt
+
+
+def rigid(rng, scale=1.0):
+    """Random rotation Q, translation t; maps x -> scale * Q x + t."""
+    Q, Rm = np.linalg.qr(rng.normal(size=(3, 3)))
+    Q = Q * np.sign(np.diag(Rm))
+    if np.linalg.det(Q) < 0:
+        Q[:, 0] *= -1
+    t = rng.normal(size=3) * 10 * scale
+    return Q, t
+
+
+def move(P, N, Q, t, scale):
+    return scale * P @ Q.T + t, N @ Q.T
+
+
+def parallel(a, b, tol):
+    return abs(abs(float(np.dot(a, b))) - 1.0) < tol
+
+
+def axis_distance(point, axis, q):
+    d = q - point
+    return np.linalg.norm(d - (d @ axis) * axis)
+
+
+seeds = st.integers(0, 2**32 - 1)
+scales = st.sampled_from([1e-3, 0.1, 1.0, 37.0, 1e3])
+
+
+# ----------------------------------------------------------------------------- exact recovery
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales)
+def test_plane_exact(seed, scale):
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    P, N = move(*plane_patch(rng), Q, t, scale)
+    s = fit_plane(P, -N)
+    assert parallel(s.params["normal"], Q[:, 2], 1e-12)
+    assert s.params["normal"] @ Q[:, 2] < 0  # oriented like the given normals
+    assert s.rms < 1e-9 * scale and s.outward
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales, outward=st.booleans())
+def test_sphere_exact(seed, scale, outward):
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    P, N = move(*sphere_patch(rng, radius=2.0, polar=rng.uniform(0.3, np.pi)), Q, t, scale)
+    s = fit_sphere(P, N if outward else -N)
+    assert np.allclose(s.params["center"], t, atol=1e-7 * scale)
+    assert s.params["radius"] == pytest.approx(2.0 * scale, rel=1e-7)
+    assert s.outward == outward and s.max_dev < 1e-7 * scale
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales)
+def test_cylinder_exact(seed, scale):
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    P, N = move(*cylinder_patch(rng, radius=1.5, arc=rng.uniform(0.5, 2 * np.pi)), Q, t, scale)
+    s = fit_cylinder(P, -N, w=rng.uniform(0.5, 2.0, len(P)))  # a hole: normals inward
+    assert parallel(s.params["axis"], Q[:, 2], 1e-9)
+    assert axis_distance(s.params["point"], s.params["axis"], t) < 1e-7 * scale
+    assert s.params["radius"] == pytest.approx(1.5 * scale, rel=1e-7)
+    assert not s.outward and s.rms < 1e-7 * scale
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales, half_angle=st.floats(0.1, 1.3))
+def test_cone_exact(seed, scale, half_angle):
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    P, N = move(*cone_patch(rng, half_angle, arc=rng.uniform(2.0, 2 * np.pi)), Q, t, scale)
+    s = fit_cone(P, N)
+    assert np.allclose(s.params["apex"], t, atol=1e-6 * scale)
+    assert s.params["axis"] @ Q[:, 2] == pytest.approx(1.0, abs=1e-9)
+    assert s.params["half_angle"] == pytest.approx(half_angle, abs=1e-7)
+    assert s.outward and s.rms < 1e-7 * scale
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales)
+def test_torus_exact(seed, scale):
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    P, N = move(*torus_patch(rng, R=3.0, r=0.8), Q, t, scale)
+    s = fit_torus(P, N)
+    assert np.allclose(s.params["center"], t, atol=1e-7 * scale)
+    assert parallel(s.params["axis"], Q[:, 2], 1e-9)
+    assert s.params["major_radius"] == pytest.approx(3.0 * scale, rel=1e-7)
+    assert s.params["minor_radius"] == pytest.approx(0.8 * scale, rel=1e-7)
+    assert s.outward and s.rms < 1e-7 * scale
+
+
+# ----------------------------------------------------------------------------- noise, patches
+
+
+def noisy(rng, P, N, sigma, normal_sigma=0.02):
+    """Gaussian noise of std sigma on the points, and on the normals (renormalised)."""
+    Nn = N + normal_sigma * rng.normal(size=N.shape)
+    return P + sigma * rng.normal(size=P.shape), Nn / np.linalg.norm(Nn, axis=1)[:, None]
+
+
+@EXAMPLES
+@given(seed=seeds, scale=scales)
+def test_noisy_patches_recover_parameters(seed, scale):
+    """Small patches with noise 1e-3 (relative): a 30-degree cylinder wedge, a fillet strip
+    (a quarter of a torus tube over 90 degrees), a narrow cone frustum band, a sphere cap."""
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    sig = 1e-3 * scale
+
+    P, N = noisy(rng, *move(*cylinder_patch(rng, 5.0, math.radians(30), 1.0), Q, t, scale), sig)
+    s = fit_cylinder(P, N)
+    assert s.params["radius"] == pytest.approx(5 * scale, rel=0.02)
+    assert parallel(s.params["axis"], Q[:, 2], 1e-4)
+
+    P, N = noisy(rng, *move(*torus_patch(rng, 10.0, 1.0, np.pi / 2, 0, np.pi / 2), Q, t, scale),
+                 sig)
+    s = fit_torus(P, N)
+    assert s.params["major_radius"] == pytest.approx(10 * scale, rel=0.01)
+    assert s.params["minor_radius"] == pytest.approx(scale, rel=0.01)
+
+    P, N = noisy(rng, *move(*cone_patch(rng, 0.5, 2 * np.pi, 1.0, 1.1), Q, t, scale), sig)
+    s = fit_cone(P, N)
+    assert s.params["half_angle"] == pytest.approx(0.5, abs=0.01)
+    assert np.linalg.norm(s.params["apex"] - t) < 0.03 * scale
+
+    P, N = noisy(rng, *move(*sphere_patch(rng, 3.0, 0.5), Q, t, scale), sig)
+    s = fit_sphere(P, N)
+    assert s.params["radius"] == pytest.approx(3 * scale, rel=0.01)
+    for s in (fit_plane(P, N), fit_cylinder(P, N), fit_cone(P, N), fit_torus(P, N)):
+        assert s is None or (math.isfinite(s.rms) and s.rms > 0)
+
+
+# ----------------------------------------------------------------------------- kind selection
+
+CASES = {
+    "plane": lambda rng: plane_patch(rng),
+    "cylinder": lambda rng: cylinder_patch(rng, 2.0, math.radians(60), 2.0),
+    "cone": lambda rng: cone_patch(rng, 0.3, math.radians(120), 1.0, 3.0),
+    "sphere": lambda rng: sphere_patch(rng, 2.0, 0.8),
+    "torus": lambda rng: torus_patch(rng, 6.0, 1.0, math.radians(60), 0, np.pi / 2),
+}
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=seeds, scale=scales)
+@pytest.mark.parametrize("kind", list(CASES))
+def test_fit_surface_chooses_the_kind(kind, seed, scale):
+    """Noise sigma and tol = 3 sigma: each kind is chosen as itself (a plane not a sphere, a
+    cylinder not a cone, a fillet band a torus, not freeform), and params come back."""
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    sig = 1e-3 * scale
+    P, N = noisy(rng, *move(*CASES[kind](rng), Q, t, scale), sig)
+    s = fit_surface(P, N, w=rng.uniform(0.5, 1.5, len(P)), tol=3 * sig)
+    assert s.kind == kind
+    assert s.rms < 1.5 * sig and within_tolerance(s, P, 3 * sig)
+
+
+def test_fit_surface_freeform_bump():
+    """A plane with a Gaussian bump is no analytic kind."""
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-1, 1, (2, 2000))
+    z = 0.05 * np.exp(-(x**2 + y**2) / 0.1)
+    gx, gy = -2 * x / 0.1 * z, -2 * y / 0.1 * z
+    N = np.c_[-gx, -gy, np.ones_like(x)]
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    s = fit_surface(np.c_[x, y, z], N, tol=1e-3)
+    assert s.kind == "freeform"
+    assert s.rms > 1e-3 and math.isfinite(s.max_dev)
+    assert s.to_dict()["type"] == "freeform"
+
+
+def test_fit_surface_single_kind_and_errors():
+    rng = np.random.default_rng(0)
+    P, N = cylinder_patch(rng, 1.0, np.pi, 1.0)
+    assert fit_surface(P, N, tol=1e-6, kinds=("cylinder",)).kind == "cylinder"
+    assert fit_surface(P, N, tol=1e-6, kinds=("plane",)).kind == "freeform"
+    assert fit_surface(P, N).kind == "cylinder"  # default tolerance: relative to the spread
+    with pytest.raises(MeshError, match="kinds"):
+        fit_surface(P, N, tol=1e-3, kinds=("cube",))
+    with pytest.raises(MeshError, match="tol"):
+        fit_surface(P, N, tol=-1.0)
+    with pytest.raises(MeshError, match=r"P must have shape \(p, 3\), got \(5, 2\)"):
+        fit_plane(np.zeros((5, 2)))
+    with pytest.raises(MeshError, match="N must have the shape"):
+        fit_cylinder(P, N[:-1])
+    with pytest.raises(MeshError, match="N is required"):
+        fit_cone(P, None)
+    with pytest.raises(MeshError, match="w"):
+        fit_sphere(P, N, w=-np.ones(len(P)))
+    with pytest.raises(MeshError, match="non-finite"):
+        fit_plane(np.full((4, 3), np.nan))
+
+
+# ----------------------------------------------------------------------------- degeneracies
+
+
+def _finite(s):
+    if s is None:
+        return True
+    vals = [np.asarray(v, dtype=float) for v in s.params.values()]
+    return all(np.all(np.isfinite(v)) for v in vals) and math.isfinite(s.rms)
+
+
+def test_degenerate_inputs_stay_finite():
+    """Each fit on data of a simpler (or no) kind returns None or a finite surface."""
+    rng = np.random.default_rng(1)
+    datasets = [
+        plane_patch(rng),  # planar: sphere/cylinder/cone/torus do not apply
+        cylinder_patch(rng, 1.0, np.pi, 2.0),  # cone of zero angle, torus of infinite radius
+        sphere_patch(rng, 1e7, 1e-7),  # a sphere so large it is a plane
+        cylinder_patch(rng, 1e7, 1e-7, 1.0),  # same for a cylinder
+        cone_patch(rng, 1e-7, np.pi, 1e7, 1e7 + 2),  # apex 1e7 away: a cylinder of radius 1
+        torus_patch(rng, 1e8, 1.0, 1e-8, 0, np.pi),  # a torus so wide it is a cylinder
+        (np.c_[np.linspace(0, 1, 20), np.zeros((20, 2))], np.tile([0, 0, 1.0], (20, 1))),
+        (np.ones((10, 3)), np.tile([0, 0, 1.0], (10, 1))),  # all points equal
+        (np.eye(3), np.eye(3)),  # too few points
+    ]
+    for P, N in datasets:
+        for fit in (fit_plane, fit_sphere, fit_cylinder, fit_cone, fit_torus):
+            assert _finite(fit(P, N)), fit.__name__
+        s = fit_surface(P, N, tol=1e-6)
+        assert s.kind in SURFACE_KINDS
+    P, N = plane_patch(rng)
+    assert fit_sphere(P, N) is None and fit_cylinder(P, N) is None
+    P, N = cylinder_patch(rng, 1.0, np.pi, 2.0)
+    assert fit_cone(P, N) is None and fit_torus(P, N) is None
+    assert fit_surface(*sphere_patch(rng, 1e7, 1e-7), tol=1e-6).kind == "plane"
+    assert fit_surface(*cone_patch(rng, 1e-7, np.pi, 1e7, 1e7 + 2), tol=1e-6).kind == "cylinder"
+    assert fit_surface(*torus_patch(rng, 1e8, 1.0, 1e-8, 0, np.pi), tol=1e-6).kind == "cylinder"
+
+
+def test_zero_weights_are_ignored():
+    rng = np.random.default_rng(2)
+    P, N = sphere_patch(rng, 1.0, 1.0)
+    P[:50] += 5.0  # outliers with zero weight
+    w = np.r_[np.zeros(50), np.ones(len(P) - 50)]
+    s = fit_sphere(P, N, w=w)
+    assert s.params["radius"] == pytest.approx(1.0, rel=1e-7) and s.max_dev < 1e-7
+    assert s.area == pytest.approx(len(P) - 50)

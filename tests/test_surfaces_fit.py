@@ -319,3 +319,165 @@ def test_zero_weights_are_ignored():
     s = fit_sphere(P, N, w=w)
     assert s.params["radius"] == pytest.approx(1.0, rel=1e-7) and s.max_dev < 1e-7
     assert s.area == pytest.approx(len(P) - 50)
+
+
+# ----------------------------------------------------------------------------- meshes
+
+
+def periodic_grid(nu, nv, close_v):
+    """Triangles of an nu x nv vertex grid, periodic in u (and in v when close_v)."""
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv if close_v else nv - 1), indexing="ij")
+
+    def idx(a, b):
+        return (a % nu) * nv + (b % nv)
+
+    a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+    return np.r_[np.c_[a.ravel(), b.ravel(), c.ravel()], np.c_[a.ravel(), c.ravel(), d.ravel()]]
+
+
+def cylinder_mesh(n_around, n_height, radius=1.0, height=2.0):
+    """Open cylinder along z, outward faces."""
+    t = 2 * np.pi * np.arange(n_around) / n_around
+    T, Z = np.meshgrid(t, np.linspace(0, height, n_height + 1), indexing="ij")
+    V = np.c_[radius * np.cos(T.ravel()), radius * np.sin(T.ravel()), Z.ravel()]
+    return V, periodic_grid(n_around, n_height + 1, False)
+
+
+def torus_mesh(nu, nv, R=3.0, r=1.0):
+    U, W = np.meshgrid(2 * np.pi * np.arange(nu) / nu, 2 * np.pi * np.arange(nv) / nv,
+                       indexing="ij")
+    U, W = U.ravel(), W.ravel()
+    V = np.c_[(R + r * np.cos(W)) * np.cos(U), (R + r * np.cos(W)) * np.sin(U), r * np.sin(W)]
+    return V, periodic_grid(nu, nv, True)
+
+
+def folded_grid(n=10):
+    """Unit square grid in z=0 whose half x > 0.5 is folded up to the wall x = 0.5 (a 90-degree
+    crease): returns V, F and the flat half's faces."""
+    x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+    x, y = x.ravel(), y.ravel()
+    V = np.c_[np.minimum(x, 0.5), y, np.maximum(x - 0.5, 0.0)]
+    i = np.arange((n + 1) * (n + 1)).reshape(n + 1, n + 1)[:-1, :-1].ravel()
+    F = np.r_[np.c_[i, i + n + 1, i + n + 2], np.c_[i, i + n + 2, i + 1]]
+    flat = np.flatnonzero(V[F].mean(axis=1)[:, 2] < 1e-12)
+    return V, F, flat
+
+
+def with_normal_noise(V, F, sigma, seed=0):
+    import igl
+
+    VN = igl.per_vertex_normals(V, F.astype(np.int64))
+    return V + sigma * np.random.default_rng(seed).normal(size=(len(V), 1)) * VN
+
+
+def test_noise_level_clean_meshes_near_zero():
+    """Vertices exactly on the surface: the facets' chord error is not noise."""
+    for V, F, bound in [
+        (*cylinder_mesh(12, 8), 1e-9),  # 30-degree facets: still exactly 0
+        (*cylinder_mesh(64, 16), 1e-9),
+        (*folded_grid()[:2], 1e-9),  # planes and a crease (a minority of vertices)
+        (*torus_mesh(60, 24), 0.02),  # doubly curved: O(h^3) left by the 1-ring quadric
+    ]:
+        h = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))
+        assert noise_level(V, F) < bound * h
+
+
+@pytest.mark.parametrize("rel_sigma", [0.01, 0.05])
+@pytest.mark.parametrize("mesh", ["cylinder", "torus"])
+def test_noise_level_measures_normal_noise(mesh, rel_sigma):
+    V, F = cylinder_mesh(64, 24) if mesh == "cylinder" else torus_mesh(90, 36)
+    h = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))
+    sigma = rel_sigma * h
+    est = noise_level(with_normal_noise(V, F, sigma), F)
+    assert 0.7 * sigma < est < 1.4 * sigma
+
+
+def test_tolerance_accepts_a_coarse_cylinder_and_is_scale_invariant():
+    """12 facets per circle: face centroids r (1 - cos 15deg) inside; still a cylinder."""
+    V, F = cylinder_mesh(12, 8, radius=2.0, height=3.0)
+    tol = fit_tolerance(V, F)
+    chord = 2.0 * (1 - math.cos(math.pi / 12))
+    assert chord < tol < 1.2 * chord
+    P, N, w = face_samples(V, F, np.arange(len(F)))
+    s = fit_surface(P, N, w, tol=tol)
+    assert s.kind == "cylinder" and abs(s.params["radius"] - 2.0) < chord
+    assert np.all(face_residuals(V, F, np.arange(len(F)), s) <= 3.0 * tol)
+    for k in (1e-3, 1e3):
+        Vk = k * V + [5.0, -7.0, 1.0]
+        assert fit_tolerance(Vk, F) == pytest.approx(k * tol, rel=1e-9)
+        assert fit_surface(*face_samples(Vk, F, np.arange(len(F))), tol=k * tol).kind == "cylinder"
+
+
+def test_tolerance_covers_noise():
+    V, F = torus_mesh(90, 36)
+    h = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))
+    Vn = with_normal_noise(V, F, 0.03 * h)
+    tol = fit_tolerance(Vn, F)
+    assert 2.0 * 0.03 * h < tol < 4.0 * 0.03 * h
+    assert fit_surface(*face_samples(Vn, F, np.arange(len(F))), tol=tol).kind == "torus"
+    assert fit_tolerance(Vn, F, noise=0.0) < tol
+
+
+def test_face_samples_of_a_segment():
+    V, F, flat = folded_grid()
+    P, N, w = face_samples(V, F, flat)
+    verts = np.unique(F[flat])
+    assert len(P) == len(verts) + len(flat)
+    assert w.sum() == pytest.approx(0.5) and np.all(w > 0)  # the flat half's area
+    assert np.allclose(N, [0, 0, 1])  # crease vertices: normals of the segment's faces only
+    mask = np.zeros(len(F), bool)
+    mask[flat] = True
+    assert np.array_equal(face_samples(V, F, mask)[0], P)
+    s = fit_surface(P, N, w, tol=1e-6)
+    assert s.kind == "plane" and s.area == pytest.approx(0.5)
+    assert np.all(face_residuals(V, F, flat, s) < 1e-12)
+    r = face_residuals(V, F, np.arange(len(F)), s)
+    assert r.shape == (len(F),) and r.max() == pytest.approx(0.5)
+    with pytest.raises(MeshError, match="faces"):
+        face_samples(V, F, [len(F)])
+    with pytest.raises(MeshError, match="F"):
+        face_samples(V, F + len(V), flat)
+    with pytest.raises(MeshError, match="F must be"):
+        noise_level(V, F[:, :2])
+
+
+# ----------------------------------------------------------------------------- Surface model
+
+
+def surface_of(kind, rng):
+    a = rng.normal(size=3)
+    a /= np.linalg.norm(a)
+    c = rng.normal(size=3)
+    return {
+        "plane": Surface("plane", {"point": c, "normal": a}),
+        "cylinder": Surface("cylinder", {"point": c, "axis": a, "radius": 1.3}),
+        "cone": Surface("cone", {"apex": c, "axis": a, "half_angle": 0.6}),
+        "sphere": Surface("sphere", {"center": c, "radius": 0.7}),
+        "torus": Surface("torus", {"center": c, "axis": a, "major_radius": 2.0,
+                                   "minor_radius": 0.5}),
+    }[kind]
+
+
+@EXAMPLES
+@given(seed=seeds)
+@pytest.mark.parametrize("kind", ANALYTIC_KINDS)
+def test_distance_project_round_trip(kind, seed):
+    """project then distance = 0; |distance| = |P - project(P)|; normals = gradient of
+    distance (central differences) wherever the distance is smooth."""
+    rng = np.random.default_rng(seed)
+    s = surface_of(kind, rng)
+    P = rng.normal(size=(200, 3)) * 2.0
+    X = s.project(P)
+    d = s.distance(P)
+    assert np.allclose(s.distance(X), 0.0, atol=1e-12)
+    assert np.allclose(np.abs(d), np.linalg.norm(P - X, axis=1), atol=1e-12)
+    G = s.normals(P)
+    assert np.allclose(np.linalg.norm(G, axis=1), 1.0)
+    assert np.allclose(P - X, d[:, None] * G, atol=1e-9)
+    e = 1e-6
+    fd = np.stack([(s.distance(P + e * u) - s.distance(P - e * u)) / (2 * e) for u in np.eye(3)],
+                  axis=1)
+    smooth = np.all(np.abs(fd - G) < 1e-4, axis=1)
+    assert smooth.mean() > 0.9  # off the axis / apex / medial set
+    rms, dev = surface_residual(s, P)
+    assert rms == pytest.approx(np.sqrt(np.mean(d * d))) and dev == pytest.approx(np.abs(d).max())

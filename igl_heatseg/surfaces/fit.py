@@ -263,12 +263,15 @@ def _area(w_raw) -> float:
 
 def _curvature_seed(c, r, fallback_n):
     """Seed ``(n, rho, kappa)`` of the curvature form from a centre ``c`` and radius ``r``:
-    ``n`` the outward normal at the surface point nearest the origin, ``rho`` its offset."""
-    if c is None or not math.isfinite(r) or r <= 0 or np.linalg.norm(c) <= 1e-9 * r:
+    ``n`` the outward normal at the surface point nearest the origin, ``rho`` its offset.
+    Without a centre: the plane through 0 normal to ``fallback_n``; with the centre at 0 (a
+    closed sphere or cylinder around the centroid): the point ``r fallback_n``."""
+    if c is None or not math.isfinite(r) or r <= 0:
         return fallback_n, 0.0, 0.0
     dc = float(np.linalg.norm(c))
-    n = -np.asarray(c) / dc
-    return n, r - dc, 1.0 / r
+    if dc <= 1e-6 * r:
+        return fallback_n, r, 1.0 / r
+    return -np.asarray(c) / dc, r - dc, 1.0 / r
 
 
 def _curv_dist(x, n, kappa):

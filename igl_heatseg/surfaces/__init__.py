@@ -5,9 +5,20 @@ Contract: takes a validated mesh (``V (n,3) float64``, ``F (m,3) int64``) and fa
 returns :class:`Surface` objects and new labels. Imports only from ``mesh`` and below.
 """
 
-from .fit import (face_residuals, face_samples, fit_cone, fit_cylinder, fit_plane, fit_sphere,
-                  fit_surface, fit_tolerance, fit_torus, noise_level, surface_residual,
-                  within_tolerance)
+from .fit import (
+    face_residuals,
+    face_samples,
+    fit_cone,
+    fit_cylinder,
+    fit_plane,
+    fit_sphere,
+    fit_surface,
+    fit_tolerance,
+    fit_torus,
+    noise_level,
+    surface_residual,
+    within_tolerance,
+)
 from .model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
 
 __all__ = ["SURFACE_KINDS", "ANALYTIC_KINDS", "Surface", "fit_plane", "fit_sphere",

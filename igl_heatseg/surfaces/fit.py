@@ -416,7 +416,8 @@ def fit_sphere(P, N=None, w=None) -> Surface | None:
     t = sol[0]
     n = _chart(n0, u0, v0, t[0], t[1])
     center = m + sc * (t[2] * n - n / t[3])
-    return _finish("sphere", {"center": center, "radius": float(sc / abs(t[3]))}, P, N, wn, _area(w))
+    params = {"center": center, "radius": float(sc / abs(t[3]))}
+    return _finish("sphere", params, P, N, wn, _area(w))
 
 
 def _cross_section_seed(X, N, wn, a):

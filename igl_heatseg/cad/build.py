@@ -203,16 +203,39 @@ def _samples(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack([Q.reshape(-1, 3), P[-1:]]), np.arange(nseg + 1) * s
 
 
+def _seam_polyline(chain, V, projs, ctx):
+    """A closed chain on a periodic surface restarted on that surface's seam (u = 0), so that
+    the seam ShapeFix_Face adds runs through the chain's vertex instead of splitting the
+    circle (near a mesh vertex that split leaves a sliver edge the sewing drops)."""
+    for side in (chain.left, chain.right):
+        if side < 0 or projs[side] is None:
+            continue
+        frame = geometry.seam_frame(ctx["surfaces"][side])
+        if frame is not None:
+            return geometry.start_at_seam(V[chain.verts], frame)
+    return None
+
+
 def _edge(chain, V, pos, projs, vertices, ctx, snap):
     """The shared TopoDS_Edge of a chain (and snapped positions of its mesh vertices)."""
     ps = [projs[s] for s in (chain.left, chain.right) if s >= 0 and projs[s] is not None]
-    P, orig = _samples(V[chain.verts])
-    P[0], P[-1] = pos[int(chain.verts[0])], pos[int(chain.verts[-1])]
+    R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
+    P, orig = _samples(V[chain.verts] if R is None else R)
+    if R is None:
+        P[0], P[-1] = pos[int(chain.verts[0])], pos[int(chain.verts[-1])]
+    lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
     if ps and len(P) > 2:
-        X, res = geometry.onto_surfaces(P[1:-1], ps)
-        ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[1:-1], axis=1) <= ctx["tol"])
-        P[1:-1] = np.where(ok[:, None], X, P[1:-1])
-    snap[chain.verts] = P[orig]
+        X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
+        ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
+                                          <= ctx["tol"])
+        P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
+    if R is None:
+        snap[chain.verts] = P[orig]
+    else:
+        P[-1] = P[0]
+        vid = int(chain.verts[0])
+        pos[vid] = P[0]
+        ctx["builder"].UpdateVertex(vertices[vid], geometry._pnt(P[0]), ctx["vertex_tol"])
     curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
     if any(s >= 0 and projs[s] is None for s in (chain.left, chain.right)):
         Q = snap[chain.verts]  # a faceted neighbour's border: chords against this curve
@@ -353,7 +376,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     V, F, labels = _validate(V, F, labels, surfaces, uv)
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
-    ctx["builder"], ctx["vtols"] = BRep_Builder(), {}
+    ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
     closed = _is_closed(F)
     timings: dict = {}
     try:

@@ -41,7 +41,8 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["occ_surface", "Projector", "onto_surfaces", "edge_curve", "curve_distance"]
+__all__ = ["occ_surface", "seam_frame", "start_at_seam", "Projector", "onto_surfaces",
+           "edge_curve", "curve_distance"]
 
 #: Singular values of the stacked surface normals below this fraction of the largest are
 #: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
@@ -81,6 +82,50 @@ def _ax3(origin, axis, outward: bool) -> gp_Ax3:
     if not outward:
         ax.YReverse()
     return ax
+
+
+def seam_frame(s: Surface):
+    """(origin, axis, x direction) of the seam half-plane ``u = 0`` of a periodic surface
+    built by :func:`occ_surface`, or None for a plane or freeform surface."""
+    p = s.params
+    if s.kind in ("cylinder", "cone", "torus"):
+        axis = np.asarray(p["axis"], dtype=np.float64)
+        origin = p["point"] if s.kind == "cylinder" else p.get("apex", p.get("center"))
+    elif s.kind == "sphere":
+        axis, origin = np.array([0.0, 0.0, 1.0]), p["center"]
+    else:
+        return None
+    return np.asarray(origin, dtype=np.float64), axis, _any_perp(axis)
+
+
+def start_at_seam(P: np.ndarray, frame):
+    """Restart a closed polyline where it crosses the seam half-plane of a periodic surface.
+
+    Parameters
+    ----------
+    P : (q, 3) float64
+        Closed polyline, ``P[0] == P[-1]``.
+    frame : tuple
+        :func:`seam_frame` of the surface.
+
+    Returns
+    -------
+    (q + 1, 3) float64 or None
+        The polyline from the crossing point around to it again; None when it does not
+        cross the half-plane (a circle not around the axis).
+    """
+    o, a, x = frame
+    y = np.cross(a, x)
+    th = np.arctan2((P - o) @ y, (P - o) @ x)
+    d = np.diff(th)
+    hit = np.flatnonzero((np.sign(th[:-1]) != np.sign(th[1:])) & (np.abs(d) < np.pi)
+                         & (th[1:] != 0))
+    if len(hit) != 1:
+        return None
+    i = int(hit[0])
+    t = -th[i] / d[i]
+    Q = P[i] + t * (P[i + 1] - P[i])
+    return np.vstack([Q, P[i + 1:-1], P[:i + 1], Q])
 
 
 def occ_surface(s: Surface):

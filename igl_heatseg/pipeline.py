@@ -30,18 +30,18 @@ from typing import Literal, Sequence
 
 import numpy as np
 
+from .errors import MeshError
+from .mesh.checks import CleanMesh
+from .mesh.geometry import face_areas
+from .mesh.topology import face_components
 from .parameterization import param as param_mod
 from .parameterization.atlas import atlas_corner_uv, pack_charts
-from .parameterization.param import parameterize_chart
-from .mesh.checks import CleanMesh
 from .parameterization.cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
-from .errors import MeshError
+from .parameterization.param import parameterize_chart
 from .segmentation.api import segment_with_mode
-from .segmentation.paper import face_areas
 from .segmentation.params import resolve_params
-from .mesh.topology import face_components
 
-__all__ = ["Chart", "PipelineResult", "run_pipeline"]
+__all__ = ["Chart", "PipelineResult", "run_pipeline", "compose_cuts"]
 
 log = logging.getLogger(__name__)
 
@@ -155,8 +155,19 @@ def _assign_paths(
     return out
 
 
-def _compose(first: CutResult, second: CutResult) -> CutResult:
-    """``second`` cut the output of ``first``: express it in ``first``'s input numbering."""
+def compose_cuts(first: CutResult, second: CutResult) -> CutResult:
+    """``second`` cut the output of ``first``: express it in ``first``'s input numbering.
+
+    Parameters
+    ----------
+    first, second : CutResult
+        ``second`` was computed on ``first.V, first.F``.
+
+    Returns
+    -------
+    CutResult
+        Vertex map, cut edges and paths in ``first``'s input numbering; lengths added.
+    """
     vm = first.vertex_map
     return CutResult(
         V=second.V,
@@ -296,7 +307,7 @@ def run_pipeline(
                 if res is None:
                     res = cut_to_disk(V, Fc, name=name)
                 elif not res.topology_after.is_disk:
-                    res = _compose(res, cut_to_disk(res.V, res.F, name=name))
+                    res = compose_cuts(res, cut_to_disk(res.V, res.F, name=name))
             elif res is None:
                 # no cutting: only check (unpinching would change nothing for a disk)
                 res = cut_to_disk(V, Fc, name=name) if ch.report["topology"]["is_disk"] else None

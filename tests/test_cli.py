@@ -160,7 +160,7 @@ def test_segment_robust_mode_reports_primitives_and_scores_better(tmp_path, data
     mesh = data_dir / "abc_00007974_5.ply"
     truth = read_labels(data_dir / "abc_00007974_5.facelabels.txt")
     area = load_mesh(mesh)
-    from igl_heatseg.segmentation.paper import face_areas
+    from igl_heatseg.mesh.geometry import face_areas
 
     w = face_areas(area.V, area.F)
     scores = {}

@@ -259,12 +259,12 @@ def test_compose_user_path_then_auto_cut():
     from test_cut import plate_with_holes
 
     from igl_heatseg.parameterization.cut import cut_along_paths, cut_to_disk
-    from igl_heatseg.pipeline import _compose
+    from igl_heatseg.pipeline import compose_cuts
 
     V, F = plate_with_holes()  # 20 x 20 cells, holes at cells (4..6, 4..6) and (12..14, 10..12)
     first = cut_along_paths(V, F, [(4 * 21 + 0, 4 * 21 + 4)])  # border -> hole 1, 4 edges
     assert first.topology_after.boundary_loops == 2
-    res = _compose(first, cut_to_disk(first.V, first.F))
+    res = compose_cuts(first, cut_to_disk(first.V, first.F))
     assert res.topology_after.is_disk
     assert res.topology_before == first.topology_before
     np.testing.assert_array_equal(res.vertex_map[res.F], F)  # corners keep input vertices

@@ -3,7 +3,8 @@ import pytest
 from meshes import cube, cylinder, disk, grid, sphere
 
 from igl_heatseg.constants import THETA_DEFAULT
-from igl_heatseg.segmentation.seeds import dihedral_deviation, face_normals, seed_groups, seed_mask, sharp_edges
+from igl_heatseg.mesh.geometry import face_normals
+from igl_heatseg.segmentation.seeds import dihedral_deviation, seed_groups, seed_mask, sharp_edges
 from igl_heatseg.mesh.topology import edge_topology
 
 

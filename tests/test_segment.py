@@ -5,7 +5,8 @@ from meshes import cube, cylinder, disk, grid, sphere
 from igl_heatseg import validate_mesh
 from igl_heatseg.io.meshes import load_mesh
 from igl_heatseg.segmentation import segment
-from igl_heatseg.segmentation.paper import face_areas, make_face_connected, segment_mesh
+from igl_heatseg.mesh.geometry import face_areas
+from igl_heatseg.segmentation.paper import make_face_connected, segment_mesh
 from igl_heatseg.mesh.topology import face_adjacency
 
 

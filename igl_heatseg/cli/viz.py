@@ -20,10 +20,10 @@ from ..viz.core import (
     DEFAULT_SIZE,
     STAGES,
     Stage,
-    scene_points,
     build_scene,
     init_polyscope,
     render_scene,
+    scene_points,
     set_camera,
 )
 from .common import add_segment_arguments

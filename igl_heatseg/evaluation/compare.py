@@ -13,21 +13,17 @@ and report the map each chart got and the share of charts that needed a fallback
 
 from __future__ import annotations
 
-import json
 import logging
-import sys
-import time
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-from ..mesh.checks import CleanMesh
 from ..errors import MeshError
+from ..mesh.checks import CleanMesh
 from ..parameterization.param import METHODS, PIPELINE_METHODS, compare_methods
 from ..segmentation import segment_with_mode
 
-__all__ = ["chart_disks", "compare_param", "format_table", "register", "DEFAULT_METHODS"]
+__all__ = ["chart_disks", "compare_param", "format_table", "DEFAULT_METHODS"]
 
 log = logging.getLogger(__name__)
 
@@ -72,8 +68,8 @@ def chart_disks(
         ``name`` is ``"<segment>.<piece>"``; ``V`` (n', 3), ``F`` (m', 3) the cut disk.  Pieces
         the cutter cannot turn into a disk are skipped with a warning.
     """
-    from ..parameterization.cut import cut_to_disk
     from ..mesh.topology import face_components
+    from ..parameterization.cut import cut_to_disk
 
     out = []
     for s in range(int(labels.max()) + 1 if len(labels) else 0):

@@ -44,8 +44,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import sys
-import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -56,12 +54,11 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import dijkstra
 
 from ..errors import MeshError
-from ..segmentation.paper import face_areas
+from ..mesh.geometry import face_areas
 from ..mesh.topology import edge_topology
 
 __all__ = [
     "Evaluation",
-    "face_areas",
     "contingency_table",
     "purity",
     "coverage",
@@ -76,7 +73,6 @@ __all__ = [
     "evaluate_labels",
     "read_labels",
     "read_truth",
-    "register",
 ]
 
 logger = logging.getLogger(__name__)

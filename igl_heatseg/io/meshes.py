@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..mesh.checks import CleanMesh, validate_mesh
 from ..errors import MeshError
+from ..mesh.checks import CleanMesh, validate_mesh
 
 __all__ = ["SUPPORTED_EXTENSIONS", "read_mesh_arrays", "load_mesh"]
 

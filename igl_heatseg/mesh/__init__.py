@@ -9,5 +9,6 @@ are the one home of mesh primitives. Imports nothing above ``errors``/``constant
 """
 
 from .checks import CleanMesh, as_mesh_arrays, validate_mesh
+from .geometry import face_areas, face_normals, uv_areas
 
-__all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays"]
+__all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays", "face_areas", "face_normals", "uv_areas"]

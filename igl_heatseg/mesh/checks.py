@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 
 from ..constants import DEGENERATE_FACE_TOL
 from ..errors import MeshError
+from .geometry import face_areas
 from .topology import corner_edges, corner_fans, edge_topology, unique_rows
 
 __all__ = ["CleanMesh", "validate_mesh", "as_mesh_arrays"]
@@ -194,7 +195,7 @@ def validate_mesh(
         )
 
     P0, P1, P2 = Vc[Fc[:, 0]], Vc[Fc[:, 1]], Vc[Fc[:, 2]]
-    dblA = np.linalg.norm(np.cross(P1 - P0, P2 - P0), axis=1)
+    dblA = 2.0 * face_areas(Vc, Fc)
     longest2 = np.max(
         [((P1 - P0) ** 2).sum(1), ((P2 - P1) ** 2).sum(1), ((P0 - P2) ** 2).sum(1)], axis=0
     )

@@ -18,7 +18,6 @@ significant digits so that a re-read file gives back the same doubles.
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,8 +31,6 @@ __all__ = [
     "min_area_rotation",
     "boxes_overlap",
     "atlas_corner_uv",
-    "write_chart_obj",
-    "write_atlas_obj",
     "GUTTER_DEFAULT",
 ]
 

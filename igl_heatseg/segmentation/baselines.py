@@ -28,13 +28,14 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
-from ..mesh.checks import as_mesh_arrays
 from ..constants import EPS_DEFAULT, THETA_DEFAULT
 from ..errors import MeshError
-from .seeds import dihedral_deviation, face_normals, seed_groups, sharp_edges
-from .paper import face_areas, make_face_connected
-from .params import check_segment_params, eps_keep
+from ..mesh.checks import as_mesh_arrays
+from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
+from .paper import make_face_connected
+from .params import check_segment_params, eps_keep
+from .seeds import dihedral_deviation, seed_groups, sharp_edges
 
 __all__ = [
     "dihedral_region_growing",

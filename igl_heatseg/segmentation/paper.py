@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import heapq
 import logging
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -26,13 +25,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..mesh.checks import CleanMesh
 from ..constants import EPS_DEFAULT, THETA_DEFAULT
-from ..heat.fast import FastHeatSolver
 from ..heat.exact import HeatSolver
+from ..heat.fast import FastHeatSolver
+from ..mesh.checks import CleanMesh
+from ..mesh.geometry import face_areas
+from ..mesh.topology import EdgeTopology, edge_topology, vertex_components
 from .params import check_segment_params, check_solver, eps_keep
 from .seeds import dihedral_deviation, seed_groups, sharp_edges
-from ..mesh.topology import EdgeTopology, edge_topology, vertex_components
 
 __all__ = [
     "final_numbering",
@@ -40,7 +40,6 @@ __all__ = [
     "Segmentation",
     "segment_mesh",
     "make_face_connected",
-    "face_areas",
     "SOLVERS",
     "heat_round",
     "group_components",
@@ -213,11 +212,6 @@ def group_components(group: np.ndarray, vcomp: np.ndarray, k: int) -> np.ndarray
     gcomp = np.zeros(k, dtype=np.int64)
     gcomp[group[group >= 0]] = vcomp[group >= 0]
     return gcomp
-
-
-def face_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Face areas, shape (m,)."""
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
 def segment_mesh(

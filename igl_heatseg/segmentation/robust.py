@@ -56,11 +56,12 @@ from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
 from ..mesh.checks import CleanMesh
+from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
+from .denoise import BILATERAL_SIGMA_R, bilateral_normals, denoise_vertices
 from .paper import (
     SOLVERS,
     Segmentation,
-    face_areas,
     final_numbering,
     group_components,
     group_seedless_components,
@@ -111,12 +112,6 @@ AXIS_ANGLE: float = math.radians(25.0)
 #: ~10 deg with 0.1 times the mean edge length.
 NOISE_FREE_ANGLE: float = math.radians(1.0)
 
-#: Bilateral normal filtering: iterations and range sigma (on ``|n_i - n_j|``).
-BILATERAL_ITERATIONS: int = 10
-BILATERAL_SIGMA_R: float = 0.35
-
-#: Vertex-update iterations after normal filtering.
-VERTEX_ITERATIONS: int = 10
 
 #: Rings of the quadric fit of ``igl.principal_curvature``.
 CURVATURE_RING: int = 2
@@ -169,99 +164,6 @@ class RobustSegmentation(Segmentation):
     primitive_rms: np.ndarray | None = None
     vertex_class: np.ndarray | None = None
     denoised_V: np.ndarray | None = None
-
-
-# --------------------------------------------------------------------------------------------
-# Denoising
-# --------------------------------------------------------------------------------------------
-
-
-def _unit_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    a = np.linalg.norm(N, axis=1)
-    return N / np.maximum(a, 1e-300)[:, None], 0.5 * a
-
-
-def _face_pairs(F: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (i, j) of faces sharing at least one vertex (including i == j)."""
-    m = F.shape[0]
-    FV = sp.csr_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), F.ravel())), shape=(m, n))
-    A = (FV @ FV.T).tocoo()
-    return A.row.astype(np.int64), A.col.astype(np.int64)
-
-
-def bilateral_normals(
-    V: np.ndarray,
-    F: np.ndarray,
-    iterations: int = BILATERAL_ITERATIONS,
-    sigma_r: float = BILATERAL_SIGMA_R,
-) -> np.ndarray:
-    """Bilateral filtering of face normals (Zheng, Fu, Au, Tai 2011).
-
-    ``n_i <- normalize(sum_j A_j W_s(|c_i - c_j|) W_r(|n_i - n_j|) n_j)`` over the faces ``j``
-    sharing a vertex with ``i`` (``i`` included), Gaussian ``W_s`` with sigma = mean centroid
-    distance of neighbouring faces, Gaussian ``W_r`` with ``sigma_r``.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    iterations : int
-    sigma_r : float
-        Range sigma on normal differences (0.35 keeps 90-degree creases, smooths noise).
-
-    Returns
-    -------
-    N : (m, 3) float64
-        Unit filtered normals (orientation of ``F``).
-    """
-    N, A = _unit_normals(V, F)
-    C = V[F].mean(axis=1)
-    i, j = _face_pairs(F, V.shape[0])
-    d = np.linalg.norm(C[i] - C[j], axis=1)
-    off = i != j
-    sigma_s = d[off].mean() if off.any() else 1.0
-    ws = A[j] * np.exp(-(d**2) / (2 * sigma_s**2))
-    m = F.shape[0]
-    for _ in range(iterations):
-        r = np.linalg.norm(N[i] - N[j], axis=1)
-        w = ws * np.exp(-(r**2) / (2 * sigma_r**2))
-        M = np.stack([np.bincount(i, weights=w * N[j, k], minlength=m) for k in range(3)], 1)
-        N = M / np.maximum(np.linalg.norm(M, axis=1, keepdims=True), 1e-300)
-    return N
-
-
-def denoise_vertices(
-    V: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: int = VERTEX_ITERATIONS
-) -> np.ndarray:
-    """Move vertices to agree with target face normals (Sun et al. 2007 vertex update).
-
-    ``x_i += (1 / |F_i|) sum_{f in F_i} n_f (n_f . (c_f - x_i))``, repeated.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    N : (m, 3) float64
-        Target unit normals (e.g. from :func:`bilateral_normals`).
-    iterations : int
-
-    Returns
-    -------
-    (n, 3) float64
-    """
-    V = V.copy()
-    n = V.shape[0]
-    cnt = np.maximum(np.bincount(F.ravel(), minlength=n), 1).astype(np.float64)
-    for _ in range(iterations):
-        C = V[F].mean(axis=1)
-        D = np.zeros_like(V)
-        for k in range(3):
-            d = ((C - V[F[:, k]]) * N).sum(axis=1)[:, None] * N
-            for c in range(3):
-                D[:, c] += np.bincount(F[:, k], weights=d[:, c], minlength=n)
-        V += D / cnt[:, None]
-    return V
 
 
 # --------------------------------------------------------------------------------------------
@@ -528,7 +430,7 @@ def merge_by_primitives(
         Number of merges.
     """
     topo = edge_topology(F) if topo is None else topo
-    N, _ = _unit_normals(V, F)
+    N, _ = (face_normals(V, F), face_areas(V, F))
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     labels = labels.copy()
     faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
@@ -706,7 +608,7 @@ def segment_robust(
     timings["denoise"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    N, areaW = _unit_normals(W, F)
+    N, areaW = (face_normals(W, F), face_areas(W, F))
     phi = _dihedral(W, F, topo)
     sharp = phi > theta
     seed = np.zeros(n, dtype=bool)

@@ -16,26 +16,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..constants import THETA_DEFAULT
+from ..mesh.geometry import face_normals
 from ..mesh.topology import EdgeTopology, edge_topology
 
-__all__ = ["face_normals", "dihedral_deviation", "sharp_edges", "seed_mask", "seed_groups"]
-
-
-def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Unit face normals, right-hand rule on ``F``'s corner order.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-        Non-degenerate faces (validated).
-
-    Returns
-    -------
-    N : (m, 3) float64
-    """
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    return N / np.linalg.norm(N, axis=1, keepdims=True)
+__all__ = ["dihedral_deviation", "sharp_edges", "seed_mask", "seed_groups"]
 
 
 def dihedral_deviation(

@@ -1,6 +1,6 @@
 """The paper's segmentation (§3.1–3.4): seeds, heat fields, argmax labels, the eps round.
 
-Decisions (ALGORITHM.md, with what the paper leaves open):
+Decisions (the paper, Mejia et al. 2018 §3.1-3.4, and what it leaves open):
 
 * Each connected component is segmented on its own: the eps rule compares a group's area with
   the largest segment *of its component*, and a component with no seed vertex at all becomes a

@@ -65,6 +65,9 @@ LM_MAX_ITER = 40
 LM_RTOL = 1e-10
 #: Stop when the step is below this (unit-spread coordinates).
 LM_XTOL = 1e-10
+#: Stop at this cost (weighted mean squared residual, unit-spread coordinates): residuals of
+#: 1e-14 of the spread are round-off, and LM steps would only be rejected from there on.
+LM_EXACT_COST = 1e-28
 #: Forward-difference step for the Jacobian (unit-spread coordinates, ~ sqrt(machine eps)).
 FD_STEP = 1e-7
 #: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
@@ -158,10 +161,19 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / n if n > 0 else np.array([0.0, 0.0, 1.0])
 
 
+def _orth(*vs) -> np.ndarray:
+    """A unit vector orthogonal to the given orthonormal vectors (the best-conditioned column
+    of the complementary projector; cheaper than np.cross on single vectors)."""
+    M = np.eye(3)
+    for v in vs:
+        M = M - np.outer(v, v)
+    return _unit(M[:, int(np.argmax(np.diag(M)))])
+
+
 def _frame(a: np.ndarray):
     """Two unit vectors completing ``a`` to an orthonormal frame."""
-    u = _unit(np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))]))
-    return u, np.cross(a, u)
+    u = _orth(a)
+    return u, _orth(a, u)
 
 
 def _chart(a0, u0, v0, s, t):
@@ -174,6 +186,19 @@ def _normalise(P, w):
     m = w @ P
     s = math.sqrt(max(float(w @ np.einsum("ij,ij->i", P - m, P - m)), 0.0))
     return m, (s if s > 0 else 1.0)
+
+
+def _rownorm(X: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.einsum("ij,ij->i", X, X))
+
+
+def _seed_sample(X, N, wn):
+    """The strided subsample (weights renormalised) that seeds are computed from."""
+    idx = _subsample(len(X))
+    if len(idx) == len(X):
+        return X, N, wn
+    ws = wn[idx]
+    return X[idx], None if N is None else N[idx], ws / max(ws.sum(), 1e-300)
 
 
 def _subsample(p: int) -> np.ndarray:
@@ -194,10 +219,9 @@ def _nearest_to_lines(X, D, w):
 
     Works in any dimension; ``None`` when the lines are (nearly) parallel.
     """
-    k = X.shape[1]
-    proj = np.eye(k)[None] - D[:, :, None] * D[:, None, :]
-    A = np.einsum("i,ijk->jk", w, proj)
-    b = np.einsum("i,ijk,ik->j", w, proj, X)
+    wD = D * w[:, None]
+    A = w.sum() * np.eye(X.shape[1]) - wD.T @ D  # sum w (I - d d^T)
+    b = w @ X - wD.T @ np.einsum("ij,ij->i", D, X)
     lam = np.linalg.eigvalsh(A)
     if lam[0] <= SEED_RCOND * max(lam[-1], 1e-300):
         return None
@@ -217,6 +241,8 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER):
     k = len(x)
     J = np.empty((len(r), k))
     for _ in range(max_iter):
+        if cost <= LM_EXACT_COST:
+            break
         for j in range(k):
             xj = x.copy()
             xj[j] += FD_STEP
@@ -251,7 +277,8 @@ def _finish(kind, params, P, N, w, area) -> Surface:
     max_dev = float(np.max(np.abs(d[w > 0])))
     outward = True
     if N is not None and kind != "plane":
-        outward = bool(w @ np.einsum("ij,ij->i", N, s.normals(P)) >= 0)
+        idx = _subsample(len(P))  # a vote: the subsample is enough
+        outward = bool(w[idx] @ np.einsum("ij,ij->i", N[idx], s.normals(P[idx])) >= 0)
     if not (math.isfinite(rms) and math.isfinite(max_dev)):
         return None
     return Surface(kind, params, rms=rms, max_dev=max_dev, area=area, outward=outward)
@@ -278,7 +305,7 @@ def _curv_dist(x, n, kappa):
     """Signed distance to the circle/sphere through ``0`` with normal ``n`` and curvature
     ``kappa`` (positive along ``n``), stable as kappa -> 0 (a plane): Lukacs et al. eq. (3)."""
     num = kappa * np.einsum("ij,ij->i", x, x) + 2.0 * (x @ n)
-    return num / (np.linalg.norm(kappa * x + n, axis=1) + 1.0)
+    return num / (_rownorm(kappa * x + n) + 1.0)
 
 
 def _run_lm(make_res, X, wn, x0):
@@ -395,13 +422,14 @@ def fit_sphere(P, N=None, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
-    c = _nearest_to_lines(X, N, wn) if N is not None else None
+    Xs, Ns, ws = _seed_sample(X, N, wn)
+    c = _nearest_to_lines(Xs, Ns, ws) if N is not None else None
     r = math.nan
     if c is None:
-        c, r = _algebraic_sphere(X, wn)
+        c, r = _algebraic_sphere(Xs, ws)
     if c is not None and not math.isfinite(r):
-        r = float(wn @ np.linalg.norm(X - c, axis=1))
-    n0, rho0, k0 = _curvature_seed(c, r, _pca_normal(X, wn))
+        r = float(ws @ _rownorm(Xs - c))
+    n0, rho0, k0 = _curvature_seed(c, r, _pca_normal(Xs, ws))
     u0, v0 = _frame(n0)
 
     def make_res(Xa, sw):
@@ -472,17 +500,20 @@ def fit_cylinder(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
-    a0 = _least_eig((N * wn[:, None]).T @ N)[1]
-    c = _cross_section_seed(X, N, wn, a0)
-    r = math.nan if c is None else float(wn @ np.linalg.norm(_perp(X - c, a0), axis=1))
-    fallback = _unit(_perp(_pca_normal(X, wn)[None], a0)[0])
+    Xs, Ns, ws = _seed_sample(X, N, wn)
+    a0 = _least_eig((Ns * ws[:, None]).T @ Ns)[1]
+    c = _cross_section_seed(Xs, Ns, ws, a0)
+    r = math.nan if c is None else float(ws @ _rownorm(_perp(Xs - c, a0)))
+    fallback = _unit(_perp(_pca_normal(Xs, ws)[None], a0)[0])
     n0, rho0, k0 = _curvature_seed(c, r, fallback)
     u0, v0 = _frame(a0)
+    n0 = _unit(n0 - (n0 @ a0) * a0)
+    b0 = _orth(a0, n0)
 
     def geometry(t):
         a = _chart(a0, u0, v0, t[0], t[1])
-        u = _unit(n0 - (n0 @ a) * a)
-        return a, math.cos(t[2]) * u + math.sin(t[2]) * np.cross(a, u)
+        n = math.cos(t[2]) * n0 + math.sin(t[2]) * b0
+        return a, _unit(n - (n @ a) * a)
 
     def make_res(Xa, sw):
         def res(t):
@@ -563,13 +594,14 @@ def fit_cone(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
-    Nc = N - wn @ N
-    axes = (_least_eig((Nc * wn[:, None]).T @ Nc)[1], _least_eig((N * wn[:, None]).T @ N)[1])
+    Xs, Ns, ws = _seed_sample(X, N, wn)
+    Nc = Ns - ws @ Ns
+    axes = (_least_eig((Nc * ws[:, None]).T @ Nc)[1], _least_eig((Ns * ws[:, None]).T @ Ns)[1])
     seeds = []
     for a0 in axes:  # refine only the seed that fits better to begin with
-        x0 = _cone_seed(X, N, wn, a0)
+        x0 = _cone_seed(Xs, Ns, ws, a0)
         if x0 is not None:
-            r = _cone_res(a0)(X, np.sqrt(wn))(x0)
+            r = _cone_res(a0)(Xs, np.sqrt(ws))(x0)
             seeds.append((float(r @ r), a0, x0))
     if not seeds:
         return None
@@ -598,7 +630,7 @@ def _cone_res(a0):
             a = _chart(a0, u0, v0, t[0], t[1])
             x = Xa - (t[2] * u0 + t[3] * v0)
             h = x @ a
-            r = np.linalg.norm(x - np.outer(h, a), axis=1)
+            r = _rownorm(x - np.outer(h, a))
             return sw * ((r - t[4]) * math.cos(t[5]) - h * math.sin(t[5]))
         return res
 
@@ -658,8 +690,9 @@ def fit_torus(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
-    a0, q = _revolution_axis(X, N, wn)
-    x0 = _torus_seed(X, N, wn, a0, q)
+    Xs, Ns, ws = _seed_sample(X, N, wn)
+    a0, q = _revolution_axis(Xs, Ns, ws)
+    x0 = _torus_seed(Xs, Ns, ws, a0, q)
     if x0 is None:
         return None
     sol = _run_lm(_torus_res(a0), X, wn, x0)
@@ -707,7 +740,7 @@ def _torus_res(a0):
             a = _chart(a0, u0, v0, t[0], t[1])
             x = Xa - (t[2] * u0 + t[3] * v0)
             h = x @ a
-            rho = np.linalg.norm(x - np.outer(h, a), axis=1)
+            rho = _rownorm(x - np.outer(h, a))
             return sw * (np.hypot(rho - t[5], h - t[4]) - t[6])
         return res
 

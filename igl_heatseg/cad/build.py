@@ -32,7 +32,7 @@ from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face  # noqa: E402
 from OCP.TopoDS import TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
-from . import faceted, freeform, geometry  # noqa: E402
+from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .fidelity import brep_fidelity  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph  # noqa: E402
@@ -237,6 +237,7 @@ def _edge(chain, V, pos, projs, vertices, ctx, snap):
         pos[vid] = P[0]
         ctx["builder"].UpdateVertex(vertices[vid], geometry._pnt(P[0]), ctx["vertex_tol"])
     curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
+    ctx["chain_points"].append(P)
     if any(s >= 0 and projs[s] is None for s in (chain.left, chain.right)):
         Q = snap[chain.verts]  # a faceted neighbour's border: chords against this curve
         gap = geometry.curve_distance(curve, 0.5 * (Q[1:] + Q[:-1])).max(initial=0.0)
@@ -255,10 +256,28 @@ def _edge(chain, V, pos, projs, vertices, ctx, snap):
     return mk.Edge()
 
 
-def _face(a, geom, loops, edges, ctx, seg_area):
+def _loop_points(loops, ctx):
+    """Per loop, the points of its one closed edge (walked like the loop), or None."""
+    out = []
+    for loop in loops:
+        if len(loop) != 1:
+            out.append(None)
+            continue
+        P = ctx["chain_points"][loop[0][0]]
+        out.append(P if loop[0][1] else P[::-1])
+    return out
+
+
+def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
     """Trimmed, fixed face of segment a, or (None, reason)."""
     builder = ctx["builder"]
-    if not loops:
+    face = None
+    if loops and ctx["surfaces"][a].is_analytic:
+        face = periodic.revolved_face(ctx["surfaces"][a], geom, _loop_points(loops, ctx),
+                                      seg_points, ctx["tol"])
+    if face is not None:
+        pass
+    elif not loops:
         mk = BRepBuilderAPI_MakeFace(geom, ctx["vertex_tol"])
         if not mk.IsDone():
             return None, "closed segment on an unbounded surface"
@@ -377,6 +396,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
     ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
+    ctx["chain_points"] = []
     closed = _is_closed(F)
     timings: dict = {}
     try:
@@ -437,7 +457,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
     for a in range(k):
         progress("faces", a / k)
         face, reason = (None, reasons[a]) if geoms[a] is None else _face(
-            a, geoms[a], graph.loops[a], edges, ctx, areas[a])
+            a, geoms[a], graph.loops[a], edges, ctx, areas[a], V[np.unique(F[seg_faces[a]])])
         if face is not None:
             faces.append(face)
         else:

@@ -76,9 +76,24 @@ def _any_perp(a) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
+#: Reference direction for the seam (u = 0) of every periodic surface: its component normal to
+#: the surface axis.  One global choice puts the seams of (nearly) coaxial surfaces - a hole's
+#: cylinder and its drill-point cone - in the same half-plane, so the closed edge between
+#: them has its vertex on both seams.  Skewed so that no usual part axis is parallel to it.
+SEAM_REFERENCE = np.array([0.8, 0.5, 0.33]) / np.linalg.norm([0.8, 0.5, 0.33])
+
+
+def _seam_x(axis) -> np.ndarray:
+    """Unit x direction of a periodic surface's frame (SEAM_REFERENCE made normal to axis)."""
+    a = np.asarray(axis, dtype=np.float64)
+    x = SEAM_REFERENCE - (SEAM_REFERENCE @ a) * a
+    n = np.linalg.norm(x)
+    return x / n if n > 1e-6 else _any_perp(a)
+
+
 def _ax3(origin, axis, outward: bool) -> gp_Ax3:
     """Right-handed frame (normal away from the axis) or, for ``outward=False``, left-handed."""
-    ax = gp_Ax3(_pnt(origin), _dir(axis), _dir(_any_perp(axis)))
+    ax = gp_Ax3(_pnt(origin), _dir(axis), _dir(_seam_x(axis)))
     if not outward:
         ax.YReverse()
     return ax
@@ -95,7 +110,7 @@ def seam_frame(s: Surface):
         axis, origin = np.array([0.0, 0.0, 1.0]), p["center"]
     else:
         return None
-    return np.asarray(origin, dtype=np.float64), axis, _any_perp(axis)
+    return np.asarray(origin, dtype=np.float64), axis, _seam_x(axis)
 
 
 def start_at_seam(P: np.ndarray, frame):

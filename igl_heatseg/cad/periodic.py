@@ -94,7 +94,7 @@ def revolved_face(s: Surface, geom, loop_points: list, seg_points: np.ndarray, t
         if dv[which].max() * vscale > tol:
             return None  # not at constant v on the segment's border
         ends.append(which)
-    if len(set(ends)) != len(ends) or (len(ends) == 1 and not _reaches_apex(s, v0, v1, ends)):
+    if len(set(ends)) != len(ends) or (len(ends) == 1 and not _reaches_apex(s, v0, v1, ends, tol)):
         return None
     if len(ends) == 1:  # the drill point: the face runs to the apex (v = 0)
         v0, v1 = (v0, 0.0) if ends[0] == 0 else (0.0, v1)
@@ -103,9 +103,10 @@ def revolved_face(s: Surface, geom, loop_points: list, seg_points: np.ndarray, t
     return mk.Face() if mk.IsDone() else None
 
 
-def _reaches_apex(s: Surface, v0: float, v1: float, ends: list) -> bool:
-    """One circle bounds a face of revolution only on a cone whose other end is the apex."""
+def _reaches_apex(s: Surface, v0: float, v1: float, ends: list, tol: float) -> bool:
+    """One circle bounds a face of revolution only on a cone whose other end is the apex
+    (v is the distance from the apex along the generatrix)."""
     if s.kind != "cone":
         return False
     other = v1 if ends[0] == 0 else v0
-    return abs(other) <= 1e-3 * max(abs(v0), abs(v1))
+    return abs(other) <= tol

@@ -7,7 +7,7 @@ import os
 
 from igl_heatseg.errors import MeshError
 
-from ._ocp import require_ocp
+from ._ocp import quiet_occ, require_ocp
 
 require_ocp()
 
@@ -54,10 +54,12 @@ def write_step(shape, path, unit: str = "mm") -> str:
     writer = STEPControl_Writer()
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", _UNITS[unit.lower()])
-    if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise RuntimeError("STEP transfer of the shape failed")
-    if writer.Write(path) != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise OSError(f"could not write STEP file {path}")
+    with quiet_occ():
+        done = writer.Transfer(shape, STEPControl_AsIs)
+        if done != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise RuntimeError("STEP transfer of the shape failed")
+        if writer.Write(path) != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise OSError(f"could not write STEP file {path}")
     logger.info("wrote %s", path)
     return path
 
@@ -77,7 +79,8 @@ def read_step(path):
     if not os.path.exists(path):
         raise MeshError(f"STEP file {path} does not exist")
     reader = STEPControl_Reader()
-    if reader.ReadFile(path) != IFSelect_ReturnStatus.IFSelect_RetDone:
-        raise MeshError(f"could not read STEP file {path}")
-    reader.TransferRoots()
-    return reader.OneShape()
+    with quiet_occ():
+        if reader.ReadFile(path) != IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise MeshError(f"could not read STEP file {path}")
+        reader.TransferRoots()
+        return reader.OneShape()

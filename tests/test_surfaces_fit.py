@@ -481,3 +481,27 @@ def test_distance_project_round_trip(kind, seed):
     assert smooth.mean() > 0.9  # off the axis / apex / medial set
     rms, dev = surface_residual(s, P)
     assert rms == pytest.approx(np.sqrt(np.mean(d * d))) and dev == pytest.approx(np.abs(d).max())
+
+
+SMALL = {
+    "cylinder": lambda rng: cylinder_patch(rng, 5.0, math.radians(30), 1.0),  # 30-deg wedge
+    "torus": lambda rng: torus_patch(rng, 10.0, 1.0, np.pi / 2, 0, np.pi / 2),  # convex fillet
+    "torus ": lambda rng: torus_patch(rng, 4.0, 1.0, np.pi / 3, np.pi / 2, np.pi),  # concave
+    "cone": lambda rng: cone_patch(rng, 0.5, 2 * np.pi, 1.0, 1.1),  # narrow frustum band
+    "cone ": lambda rng: cone_patch(rng, 0.3, np.pi / 3, 1.0, 2.0),  # 60-degree wedge
+    "sphere": lambda rng: sphere_patch(rng, 3.0, 0.3),  # small cap
+}
+
+
+@settings(max_examples=4, deadline=None)
+@given(seed=seeds, scale=scales)
+@pytest.mark.parametrize("kind", list(SMALL))
+def test_small_patches_with_noisy_normals(kind, seed, scale):
+    """Normals off by ~6 degrees (0.1 rad per component, like face normals of a noisy scan):
+    the seeds still lead to the right kind (the torus seed from tube centres, not only from
+    the Pluecker axis, whose lever arm is the major radius)."""
+    rng = np.random.default_rng(seed)
+    Q, t = rigid(rng, scale)
+    sig = 1e-3 * scale
+    P, N = noisy(rng, *move(*SMALL[kind](rng), Q, t, scale), sig, normal_sigma=0.1)
+    assert fit_surface(P, N, tol=3 * sig).kind == kind.strip()

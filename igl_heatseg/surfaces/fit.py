@@ -30,6 +30,7 @@ import math
 
 import igl
 import numpy as np
+from scipy.optimize import minimize_scalar
 from scipy.stats import chi2
 
 from ..errors import MeshError
@@ -373,15 +374,16 @@ def fit_plane(P, N=None, w=None) -> Surface | None:
 
 
 def _algebraic_sphere(X, wn):
-    """Centre and radius of the algebraic (Kasa) sphere ``|x|^2 = 2 c.x + k``; None if planar."""
+    """Centre and radius of the algebraic (Kasa) sphere or circle ``|x|^2 = 2 c.x + k`` (any
+    dimension); None if the points are (nearly) on a hyperplane."""
     sw = np.sqrt(wn)[:, None]
     A = np.c_[2.0 * X, np.ones(len(X))] * sw
     b = np.einsum("ij,ij->i", X, X) * sw[:, 0]
     sol, _, rank, sv = np.linalg.lstsq(A, b, rcond=None)
-    if rank < 4 or sv[-1] <= SEED_RCOND * sv[0]:
+    if rank < A.shape[1] or sv[-1] <= SEED_RCOND * sv[0]:
         return None, math.nan
-    c = sol[:3]
-    return c, math.sqrt(max(sol[3] + c @ c, 0.0))
+    c = sol[:-1]
+    return c, math.sqrt(max(sol[-1] + c @ c, 0.0))
 
 
 def fit_sphere(P, N=None, w=None) -> Surface | None:
@@ -691,10 +693,14 @@ def fit_torus(P, N, w=None) -> Surface | None:
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
     Xs, Ns, ws = _seed_sample(X, N, wn)
-    a0, q = _revolution_axis(Xs, Ns, ws)
-    x0 = _torus_seed(Xs, Ns, ws, a0, q)
-    if x0 is None:
+    seeds = [_torus_seed(Xs, Ns, ws, *_revolution_axis(Xs, Ns, ws)), _spine_seed(Xs, Ns, ws)]
+    costs = []
+    for a0, x0 in (e for e in seeds if e is not None):  # refine the better seed only
+        r = _torus_res(a0)(Xs, np.sqrt(ws))(x0)
+        costs.append((float(r @ r), a0, x0))
+    if not costs:
         return None
+    _, a0, x0 = min(costs, key=lambda e: e[0])
     sol = _run_lm(_torus_res(a0), X, wn, x0)
     if sol is None:
         return None
@@ -711,7 +717,7 @@ def fit_torus(P, N, w=None) -> Surface | None:
 
 
 def _torus_seed(X, N, wn, a0, q):
-    """Torus seed ``[0, 0, c1, c2, h0, R, r]`` from the axis ``(a0, q)``, or None."""
+    """Torus seed ``(a0, [0, 0, c1, c2, h0, R, r])`` from the axis ``(a0, q)``, or None."""
     u0, v0 = _frame(a0)
     c = q - (q @ a0) * a0
     x = X - c
@@ -729,7 +735,43 @@ def _torus_seed(X, N, wn, a0, q):
     if tube is None:
         return None
     r = float(wn @ np.linalg.norm(Y - tube, axis=1))
-    return np.array([0.0, 0.0, c @ u0, c @ v0, tube[1], tube[0], r])
+    return a0, np.array([0.0, 0.0, c @ u0, c @ v0, tube[1], tube[0], r])
+
+
+def _spine_seed(X, N, wn):
+    """Torus seed from the tube centres ``X - r N``: for the minor radius ``r`` they lie on a
+    circle (the spine), so their scatter is flat; ``r`` minimises the ratio of its least to its
+    largest eigenvalue (grid over |r| in [1e-2, 1e2] spreads, both signs, then a bounded 1-D
+    search around an interior grid minimum; as |r| grows the scatter tends to that of the
+    normals, flat for cylinders and cones). Insensitive to normal noise for thin tubes, where
+    the Pluecker axis (lever arm: the major radius) is not. Returns ``(axis, seed)`` or None."""
+    Xc, Nc = X - wn @ X, N - wn @ N
+    Cxx, Cxn, Cnn = (Xc * wn[:, None]).T @ Xc, (Xc * wn[:, None]).T @ Nc, (Nc * wn[:, None]).T @ Nc
+
+    def flatness(r):
+        lam = np.linalg.eigvalsh(Cxx - r[..., None, None] * (Cxn + Cxn.T)
+                                 + (r * r)[..., None, None] * Cnn)
+        return lam[..., 0] / np.maximum(lam[..., 2], 1e-300)
+
+    g = np.geomspace(1e-2, 1e2, 41)
+    grid = np.r_[-g[::-1], g]
+    f = flatness(grid)
+    i = int(np.argmin(f[1:-1])) + 1  # the ends: normals on a circle (cylinder, cone), no tube
+    if f[i] >= min(f[i - 1], f[i + 1]):
+        return None
+    lo, hi = grid[i - 1], grid[i + 1]
+    r = float(minimize_scalar(lambda x: float(flatness(np.array(x))), bounds=(lo, hi),
+                              method="bounded", options={"xatol": 1e-6}).x)
+    Q = X - r * N
+    lam, E = np.linalg.eigh(Cxx - r * (Cxn + Cxn.T) + r * r * Cnn)
+    if lam[1] <= 1e-6 * lam[2]:  # centres on a line (a cylinder) or a point (a sphere)
+        return None
+    a = E[:, 0]
+    u0, v0 = _frame(a)
+    c2, R = _algebraic_sphere(Q @ np.c_[u0, v0], wn)
+    if c2 is None or not R > 0:
+        return None
+    return a, np.array([0.0, 0.0, c2[0], c2[1], wn @ (Q @ a), R, abs(r)])
 
 
 def _torus_res(a0):

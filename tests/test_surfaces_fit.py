@@ -505,3 +505,21 @@ def test_small_patches_with_noisy_normals(kind, seed, scale):
     sig = 1e-3 * scale
     P, N = noisy(rng, *move(*SMALL[kind](rng), Q, t, scale), sig, normal_sigma=0.1)
     assert fit_surface(P, N, tol=3 * sig).kind == kind.strip()
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=seeds, p=st.integers(1, 60), spread=st.sampled_from([1e-9, 1e-3, 1.0, 1e6]),
+       flat=st.sampled_from([0, 1, 2, 3]))
+def test_random_input_never_raises_or_gives_nan(seed, p, spread, flat):
+    """Arbitrary clouds (flattened to planes, lines or points) and normals: each fit returns
+    None or finite parameters and residuals; fit_surface always returns a Surface."""
+    rng = np.random.default_rng(seed)
+    P = rng.normal(size=(p, 3)) * spread + rng.normal(size=3) * 1e3
+    P[:, :flat] = P[0, :flat]
+    N = rng.normal(size=(p, 3))
+    N /= np.linalg.norm(N, axis=1)[:, None]
+    w = rng.uniform(0, 1, p) if seed % 2 else None
+    for fit in (fit_plane, fit_sphere, fit_cylinder, fit_cone, fit_torus):
+        s = fit(P, N, w)
+        assert _finite(s) and (s is None or math.isfinite(s.max_dev)), fit.__name__
+    assert fit_surface(P, N, w, tol=1e-3 * spread).kind in SURFACE_KINDS

@@ -29,8 +29,9 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace 
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
 from OCP.GProp import GProp_GProps  # noqa: E402
-from OCP.ShapeFix import ShapeFix_Face  # noqa: E402
-from OCP.TopoDS import TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
+from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
+from OCP.TopAbs import TopAbs_FACE  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .fidelity import brep_fidelity  # noqa: E402
@@ -61,6 +62,11 @@ FACE_AREA_SLACK = 0.2
 #: Sewing tolerance over the largest gap between a faceted patch's border chords and the
 #: neighbouring face's edge curve (the sagitta of the chords plus margin).
 FACET_GAP_FACTOR = 1.5
+
+#: A face of revolution is built on a (u, v) rectangle when its loop edges stay within this
+#: fraction of the sewing tolerance of their mean-v circle: those circles then replace the
+#: loop edges, and sewing must close the gap.
+REVOLVED_SEW_FRACTION = 0.9
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -274,7 +280,7 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
     face = None
     if loops and ctx["surfaces"][a].is_analytic:
         face = periodic.revolved_face(ctx["surfaces"][a], geom, _loop_points(loops, ctx),
-                                      seg_points, ctx["tol"])
+                                      seg_points, REVOLVED_SEW_FRACTION * ctx["sew_tol"])
     if face is not None:
         pass
     elif not loops:
@@ -283,6 +289,11 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
             return None, "closed segment on an unbounded surface"
         face = mk.Face()
     else:
+        surf = ctx["surfaces"][a]
+        if geometry.seam_frame(surf) is not None:  # seam away from the loops' vertices
+            ends = [ctx["pos"][int(v)] for lp in loops for c, _ in lp
+                    for v in (ctx["chains"][c].verts[0], ctx["chains"][c].verts[-1])]
+            geom = geometry.occ_surface(surf, geometry.seam_away_from(surf, np.array(ends)))
         face = TopoDS_Face()
         builder.MakeFace(face, geom, ctx["vertex_tol"])
         for loop in loops:
@@ -298,7 +309,14 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         fix.Perform()
         face = fix.Face()
     if not BRepCheck_Analyzer(face).IsValid():
-        return None, "trimmed face is not valid (BRepCheck)"
+        fix = ShapeFix_Shape(face)  # same-parameter and tolerance fixes on the edges
+        fix.SetPrecision(ctx["vertex_tol"])
+        fix.SetMaxTolerance(ctx["sew_tol"])
+        fix.Perform()
+        fixed = fix.Shape()
+        if fixed.ShapeType() != TopAbs_FACE or not BRepCheck_Analyzer(fixed).IsValid():
+            return None, "trimmed face is not valid (BRepCheck)"
+        face = TopoDS.Face(fixed)
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(face, props)
     area = props.Mass()
@@ -441,6 +459,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
     ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons) if r is None])
     t = time.perf_counter()
     pos = _place_vertices(V, graph, projs, ctx["tol"], ctx)
+    ctx["pos"], ctx["chains"] = pos, graph.chains
     vertices = {v: _vertex(ctx["builder"], X, ctx["vertex_tol"]) for v, X in pos.items()}
     snap = V.copy()
     for v, X in pos.items():

@@ -41,7 +41,7 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["occ_surface", "seam_frame", "start_at_seam", "Projector", "onto_surfaces",
+__all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector", "onto_surfaces",
            "edge_curve", "curve_distance"]
 
 #: Singular values of the stacked surface normals below this fraction of the largest are
@@ -91,9 +91,13 @@ def _seam_x(axis) -> np.ndarray:
     return x / n if n > 1e-6 else _any_perp(a)
 
 
-def _ax3(origin, axis, outward: bool) -> gp_Ax3:
-    """Right-handed frame (normal away from the axis) or, for ``outward=False``, left-handed."""
-    ax = gp_Ax3(_pnt(origin), _dir(axis), _dir(_seam_x(axis)))
+def _ax3(origin, axis, outward: bool, seam_angle: float = 0.0) -> gp_Ax3:
+    """Right-handed frame (normal away from the axis) or, for ``outward=False``, left-handed;
+    x is the seam direction turned by ``seam_angle`` about the axis."""
+    a = np.asarray(axis, dtype=np.float64)
+    x0 = _seam_x(a)
+    x = math.cos(seam_angle) * x0 + math.sin(seam_angle) * np.cross(a, x0)
+    ax = gp_Ax3(_pnt(origin), _dir(a), _dir(x))
     if not outward:
         ax.YReverse()
     return ax
@@ -143,13 +147,16 @@ def start_at_seam(P: np.ndarray, frame):
     return np.vstack([Q, P[i + 1:-1], P[:i + 1], Q])
 
 
-def occ_surface(s: Surface):
+def occ_surface(s: Surface, seam_angle: float = 0.0):
     """OCC surface of an analytic :class:`Surface`, normal oriented like its mesh normals.
 
     Parameters
     ----------
     s : Surface
         Kind plane, cylinder, cone, sphere or torus.
+    seam_angle : float
+        Rotation (radians, right-handed about the axis) of a periodic surface's seam from
+        its :func:`seam_frame` direction.
 
     Returns
     -------
@@ -162,17 +169,31 @@ def occ_surface(s: Surface):
     if s.kind == "plane":
         return Geom_Plane(_ax3(p["point"], p["normal"], True))
     if s.kind == "cylinder":
-        return Geom_CylindricalSurface(_ax3(p["point"], p["axis"], s.outward), float(p["radius"]))
+        return Geom_CylindricalSurface(_ax3(p["point"], p["axis"], s.outward, seam_angle), float(p["radius"]))
     if s.kind == "cone":
-        return Geom_ConicalSurface(_ax3(p["apex"], p["axis"], s.outward),
+        return Geom_ConicalSurface(_ax3(p["apex"], p["axis"], s.outward, seam_angle),
                                    float(p["half_angle"]), 0.0)
     if s.kind == "sphere":
-        return Geom_SphericalSurface(_ax3(p["center"], [0.0, 0.0, 1.0], s.outward),
+        return Geom_SphericalSurface(_ax3(p["center"], [0.0, 0.0, 1.0], s.outward, seam_angle),
                                      float(p["radius"]))
     if s.kind == "torus":
-        return Geom_ToroidalSurface(_ax3(p["center"], p["axis"], s.outward),
+        return Geom_ToroidalSurface(_ax3(p["center"], p["axis"], s.outward, seam_angle),
                                     float(p["major_radius"]), float(p["minor_radius"]))
     raise ValueError(f"no analytic OCC surface for kind {s.kind!r}")
+
+
+def seam_away_from(s: Surface, P: np.ndarray) -> float:
+    """Seam angle (for :func:`occ_surface`) in the middle of the widest angular gap between
+    points around the surface's axis: ShapeFix_Face's seam then cuts the face's edges far from
+    their vertices (a cut next to a vertex leaves a sliver edge that sewing loses)."""
+    frame = seam_frame(s)
+    if frame is None or len(P) == 0:
+        return 0.0
+    o, a, x = frame
+    th = np.sort(np.mod(np.arctan2((P - o) @ np.cross(a, x), (P - o) @ x), 2 * math.pi))
+    gaps = np.diff(np.r_[th, th[0] + 2 * math.pi])
+    i = int(np.argmax(gaps))
+    return float(th[i] + 0.5 * gaps[i])
 
 
 def _analytic_gradient(s: Surface, X: np.ndarray) -> np.ndarray:

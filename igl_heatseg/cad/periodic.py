@@ -72,7 +72,7 @@ def revolved_face(s: Surface, geom, loop_points: list, seg_points: np.ndarray, t
     seg_points : (p, 3) float64
         The segment's mesh vertices (they decide which side of the circles the face is).
     tol : float
-        Distance by which loop points may leave their circle.
+        Distance by which loop points may leave their constant-v circle (model units).
 
     Returns
     -------
@@ -83,7 +83,7 @@ def revolved_face(s: Surface, geom, loop_points: list, seg_points: np.ndarray, t
     vs = surface_uv(s, seg_points)[1]
     v0, v1 = _v_range(s, vs)
     vscale = s.params["minor_radius"] if s.kind == "torus" else 1.0
-    ends = []
+    ends, levels = [], []
     for P in loop_points:
         u, v = surface_uv(s, P)
         if np.ptp(np.unwrap(u)) < 1.5 * math.pi:
@@ -91,16 +91,26 @@ def revolved_face(s: Surface, geom, loop_points: list, seg_points: np.ndarray, t
         dv = [np.abs(np.angle(np.exp(1j * (v - e)))) if s.kind == "torus" else np.abs(v - e)
               for e in (v0, v1)]
         which = int(np.argmin([d.max() for d in dv]))
-        if dv[which].max() * vscale > tol:
+        mid = (v0, v1)[which] + _mean_offset(v - (v0, v1)[which], s.kind == "torus")
+        spread = np.abs(v - mid)
+        if s.kind == "torus":
+            spread = np.abs(np.angle(np.exp(1j * (v - mid))))
+        if spread.max() * vscale > tol:
             return None  # not at constant v on the segment's border
         ends.append(which)
+        levels.append(mid)
     if len(set(ends)) != len(ends) or (len(ends) == 1 and not _reaches_apex(s, v0, v1, ends, tol)):
         return None
-    if len(ends) == 1:  # the drill point: the face runs to the apex (v = 0)
-        v0, v1 = (v0, 0.0) if ends[0] == 0 else (0.0, v1)
+    lv = dict(zip(ends, levels))  # each circle at its loop's mean v
+    v0, v1 = lv.get(0, 0.0), lv.get(1, 0.0)  # one circle: the drill point runs to the apex
     u0 = float(surface_uv(s, loop_points[0][:1])[0][0])
     mk = BRepBuilderAPI_MakeFace(geom, u0, u0 + 2 * math.pi, v0, v1, 1e-7)
     return mk.Face() if mk.IsDone() else None
+
+
+def _mean_offset(d: np.ndarray, circular: bool) -> float:
+    """Mean of v differences (angles wrapped to (-pi, pi] on the torus)."""
+    return float(np.angle(np.exp(1j * d)).mean()) if circular else float(d.mean())
 
 
 def _reaches_apex(s: Surface, v0: float, v1: float, ends: list, tol: float) -> bool:

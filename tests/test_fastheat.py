@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 from meshes import cube, cylinder, disk, grid, sphere
 
-from igl_heatseg.heat.fast import FastHeatSolver, _merge_topk, _seed_face_labels, _topk_rows
+from igl_heatseg.heat.certify import merge_topk, topk_rows
+from igl_heatseg.heat.exact import seed_face_labels
+from igl_heatseg.heat.fast import FastHeatSolver
 from igl_heatseg.heat.exact import HeatSolver
 from igl_heatseg.segmentation.seeds import seed_groups, seed_mask
 
@@ -136,7 +138,7 @@ def test_seedless_component_raises():
 def test_topk_helpers_against_sort():
     rng = np.random.default_rng(0)
     M = rng.random((50, 9))
-    v, i, rest = _topk_rows(M, 4)
+    v, i, rest = topk_rows(M, 4)
     s = -np.sort(-M, axis=1)
     np.testing.assert_array_equal(v, s[:, :4])
     np.testing.assert_array_equal(np.take_along_axis(M, i, 1), v)
@@ -148,8 +150,8 @@ def test_topk_helpers_against_sort():
     rows = np.arange(50)
     M2 = rng.random((50, 7))
     for block, gids in ((M, np.arange(9)), (M2, 9 + np.arange(7))):
-        bv, bi, bx = _topk_rows(block, 4)
-        _merge_topk(val, ids, exc, rows, bv, gids[bi], bx)
+        bv, bi, bx = topk_rows(block, 4)
+        merge_topk(val, ids, exc, rows, bv, gids[bi], bx)
     allv = np.c_[M, M2]
     s = -np.sort(-allv, axis=1)
     np.testing.assert_array_equal(val, s[:, :4])
@@ -159,7 +161,7 @@ def test_topk_helpers_against_sort():
 
 def test_seed_face_labels_majority_then_lowest_id():
     Gc = np.array([[3, 3, 1], [1, 5, 5], [4, 2, 9], [7, 7, 7], [2, 8, 2]])
-    np.testing.assert_array_equal(_seed_face_labels(Gc), [3, 5, 2, 7, 2])
+    np.testing.assert_array_equal(seed_face_labels(Gc), [3, 5, 2, 7, 2])
 
 
 def _segment(mesh, solver, monkeypatch):
@@ -210,20 +212,20 @@ def test_open_items_refined_with_nearby_groups(monkeypatch):
 def test_clusters_join_near_items_within_a_part():
     import scipy.sparse as sp
 
-    from igl_heatseg.heat.fast import _clusters
+    from igl_heatseg.heat.patches import clusters
 
     # a path graph 0-1-2-...-29
     n = 30
     P = sp.diags([np.ones(n - 1), np.ones(n - 1)], [-1, 1], format="csr", dtype=np.int8)
     item = np.array([0, 3, 20, 29, 3])
     split = np.zeros(n, dtype=np.int64)
-    count, cl = _clusters(P, item, 2, split)  # joined when at most 4 hops apart
+    count, cl = clusters(P, item, 2, split)  # joined when at most 4 hops apart
     assert count == 3
     assert cl[0] == cl[1] == cl[4] and len({cl[0], cl[2], cl[3]}) == 3
     split[2:] = 1  # vertex 0 and vertex 3 now lie in different parts
-    count, cl = _clusters(P, item, 2, split)
+    count, cl = clusters(P, item, 2, split)
     assert count == 4 and cl[0] != cl[1] and cl[1] == cl[4]
-    assert _clusters(P, np.zeros(0, dtype=np.int64), 2, split)[0] == 0
+    assert clusters(P, np.zeros(0, dtype=np.int64), 2, split)[0] == 0
 
 
 @pytest.mark.parametrize("seed", [0, 2])

@@ -75,12 +75,12 @@ def test_streaming_labels_equal_dense_argmax_with_low_id_ties():
 
 
 def test_exact_ties_go_to_the_lowest_group_across_batches():
-    from igl_heatseg.heat.exact import _argmax_update
+    from igl_heatseg.heat.exact import argmax_update
 
     best = np.full(3, -np.inf)
     arg = np.zeros(3, dtype=np.int64)
-    _argmax_update(np.array([[0.5, 0.5], [0.2, 0.8], [0.4, 0.1]]), 0, best, arg)
-    _argmax_update(np.array([[0.5, 0.1], [0.8, 0.0], [0.9, 0.0]]), 2, best, arg)
+    argmax_update(np.array([[0.5, 0.5], [0.2, 0.8], [0.4, 0.1]]), 0, best, arg)
+    argmax_update(np.array([[0.5, 0.1], [0.8, 0.0], [0.9, 0.0]]), 2, best, arg)
     assert arg.tolist() == [0, 1, 2]
 
 

@@ -59,16 +59,21 @@ log = logging.getLogger(__name__)
 FAR_RATIO = 1e4
 #: A torus whose major radius is below this fraction of its minor radius is a sphere.
 TORUS_MIN_MAJOR = 1e-3
-#: Levenberg-Marquardt: most iterations (a seeded fit converges in 3-10).
-LM_MAX_ITER = 40
-#: Stop when an iteration lowers the cost by less than this fraction (float64 noise is ~1e-16;
-#: parameters are then converged to ~1e-6 of the spread).
-LM_RTOL = 1e-10
+#: Levenberg-Marquardt: most iterations (a seeded fit of the right kind converges in 3-10;
+#: a wrong kind creeps along a degenerate direction and is stopped here or by LM_RTOL).
+LM_MAX_ITER = 30
+#: Stop when an iteration lowers the cost by less than this fraction: the rms is then settled
+#: to ~1e-7 relative, far below any tolerance decision (the right kind converges
+#: quadratically to round-off anyway, see LM_EXACT_COST).
+LM_RTOL = 1e-7
 #: Stop when the step is below this (unit-spread coordinates).
 LM_XTOL = 1e-10
 #: Stop at this cost (weighted mean squared residual, unit-spread coordinates): residuals of
 #: 1e-14 of the spread are round-off, and LM steps would only be rejected from there on.
 LM_EXACT_COST = 1e-28
+#: With a give-up level (fit_surface: GIVE_UP_FACTOR times what a candidate must reach to
+#: matter), stop once the cost is above it and an iteration gains less than this fraction.
+LM_GIVE_UP_GAIN = 1e-2
 #: Forward-difference step for the Jacobian (unit-spread coordinates, ~ sqrt(machine eps)).
 FD_STEP = 1e-7
 #: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
@@ -77,6 +82,10 @@ LM_MAX_POINTS = 1500
 #: Relative eigenvalue / determinant below which a seed's linear system counts as singular.
 SEED_RCOND = 1e-9
 
+#: fit_surface: a candidate stops iterating once its rms stays above this multiple of tol and
+#: creeps (a wrong kind slides along a degenerate valley for dozens of iterations otherwise);
+#: such a candidate is never accepted, and its rms, a few percent high, only ranks it.
+GIVE_UP_FACTOR = 3.0
 #: fit_surface: a more complex kind replaces a simpler one only when its RMS is below the
 #: simpler one's divided by this factor ...
 BEAT_FACTOR = 1.5
@@ -229,10 +238,10 @@ def _nearest_to_lines(X, D, w):
     return np.linalg.solve(A, b)
 
 
-def _lm(res, x0, max_iter: int = LM_MAX_ITER):
+def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
     """Levenberg-Marquardt on ``res(x) -> (p,)`` weighted residuals (forward-difference
     Jacobian). Returns the parameters and the cost ``|res|^2``, or ``None`` if ``res(x0)`` is
-    not finite."""
+    not finite. Stops early while the cost is above ``give_up`` and creeping."""
     x = np.asarray(x0, dtype=np.float64).copy()
     r = res(x)
     cost = float(r @ r)
@@ -265,6 +274,8 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER):
         gain = cost - cn
         x, r, cost = x + step, rn, cn
         lam = max(lam * 0.1, 1e-12)
+        if cost > give_up and gain < LM_GIVE_UP_GAIN * (cost + gain):
+            break
         if gain <= LM_RTOL * cost + 1e-300 or np.linalg.norm(step) < LM_XTOL:
             break
     return x, cost
@@ -309,15 +320,15 @@ def _curv_dist(x, n, kappa):
     return num / (_rownorm(kappa * x + n) + 1.0)
 
 
-def _run_lm(make_res, X, wn, x0):
+def _run_lm(make_res, X, wn, x0, give_up: float = math.inf):
     """LM on at most LM_MAX_POINTS strided samples, then a short polish on all points."""
     idx = _subsample(len(X))
     if len(idx) == len(X):
-        return _lm(make_res(X, np.sqrt(wn)), x0)
+        return _lm(make_res(X, np.sqrt(wn)), x0, give_up=give_up)
     ws = wn[idx]
-    sol = _lm(make_res(X[idx], np.sqrt(ws / max(ws.sum(), 1e-300))), x0)
-    if sol is None:
-        return None
+    sol = _lm(make_res(X[idx], np.sqrt(ws / max(ws.sum(), 1e-300))), x0, give_up=give_up)
+    if sol is None or sol[1] > give_up:
+        return sol
     return _lm(make_res(X, np.sqrt(wn)), sol[0], max_iter=1)
 
 
@@ -386,7 +397,7 @@ def _algebraic_sphere(X, wn):
     return c, math.sqrt(max(sol[-1] + c @ c, 0.0))
 
 
-def fit_sphere(P, N=None, w=None) -> Surface | None:
+def fit_sphere(P, N=None, w=None, *, give_up_rms: float | None = None) -> Surface | None:
     """Geometric least-squares sphere.
 
     Seeded by the point nearest to all normal lines (or an algebraic fit without normals), then
@@ -402,6 +413,10 @@ def fit_sphere(P, N=None, w=None) -> Surface | None:
         Unit normals (seed and ``outward``).
     w : (p,) array_like, optional
         Non-negative weights.
+    give_up_rms : float, optional
+        Stop iterating once the rms (model units) stays above this and improves by less than
+        LM_GIVE_UP_GAIN per iteration (:func:`fit_surface` passes GIVE_UP_FACTOR * tol); the
+        result is then a partly refined fit.
 
     Returns
     -------
@@ -424,6 +439,7 @@ def fit_sphere(P, N=None, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
+    give_up = math.inf if give_up_rms is None else (give_up_rms / sc) ** 2
     Xs, Ns, ws = _seed_sample(X, N, wn)
     c = _nearest_to_lines(Xs, Ns, ws) if N is not None else None
     r = math.nan
@@ -440,7 +456,7 @@ def fit_sphere(P, N=None, w=None) -> Surface | None:
             return sw * _curv_dist(Xa - t[2] * n, n, t[3])
         return res
 
-    sol = _run_lm(make_res, X, wn, [0.0, 0.0, rho0, k0])
+    sol = _run_lm(make_res, X, wn, [0.0, 0.0, rho0, k0], give_up)
     if sol is None or abs(sol[0][3]) * FAR_RATIO <= 1.0:
         return None
     t = sol[0]
@@ -464,7 +480,7 @@ def _cross_section_seed(X, N, wn, a):
     return None if c2 is None else B @ c2
 
 
-def fit_cylinder(P, N, w=None) -> Surface | None:
+def fit_cylinder(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | None:
     """Geometric least-squares cylinder.
 
     Seed: the axis is the least eigenvector of the normals' weighted scatter (a cylinder's
@@ -480,6 +496,10 @@ def fit_cylinder(P, N, w=None) -> Surface | None:
         Unit normals at the points (required: they seed the axis).
     w : (p,) array_like, optional
         Non-negative weights.
+    give_up_rms : float, optional
+        Stop iterating once the rms (model units) stays above this and improves by less than
+        LM_GIVE_UP_GAIN per iteration (:func:`fit_surface` passes GIVE_UP_FACTOR * tol); the
+        result is then a partly refined fit.
 
     Returns
     -------
@@ -502,6 +522,7 @@ def fit_cylinder(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
+    give_up = math.inf if give_up_rms is None else (give_up_rms / sc) ** 2
     Xs, Ns, ws = _seed_sample(X, N, wn)
     a0 = _least_eig((Ns * ws[:, None]).T @ Ns)[1]
     c = _cross_section_seed(Xs, Ns, ws, a0)
@@ -523,7 +544,7 @@ def fit_cylinder(P, N, w=None) -> Surface | None:
             return sw * _curv_dist(_perp(Xa - t[3] * n, a), n, t[4])
         return res
 
-    sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0])
+    sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0], give_up)
     if sol is None or abs(sol[0][4]) * FAR_RATIO <= 1.0:
         return None
     t = sol[0]
@@ -554,7 +575,7 @@ def _cone_seed(X, N, wn, a0):
     return np.array([0.0, 0.0, c @ u0, c @ v0, rm - slope * hm, math.atan(slope)])
 
 
-def fit_cone(P, N, w=None) -> Surface | None:
+def fit_cone(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | None:
     """Geometric least-squares cone (one nappe).
 
     Seeds: the axis is the normal of the plane fitted to the normal vectors (a cone's normals
@@ -571,6 +592,10 @@ def fit_cone(P, N, w=None) -> Surface | None:
         Unit normals (required).
     w : (p,) array_like, optional
         Non-negative weights.
+    give_up_rms : float, optional
+        Stop iterating once the rms (model units) stays above this and improves by less than
+        LM_GIVE_UP_GAIN per iteration (:func:`fit_surface` passes GIVE_UP_FACTOR * tol); the
+        result is then a partly refined fit.
 
     Returns
     -------
@@ -596,6 +621,7 @@ def fit_cone(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
+    give_up = math.inf if give_up_rms is None else (give_up_rms / sc) ** 2
     Xs, Ns, ws = _seed_sample(X, N, wn)
     Nc = Ns - ws @ Ns
     axes = (_least_eig((Nc * ws[:, None]).T @ Nc)[1], _least_eig((Ns * ws[:, None]).T @ Ns)[1])
@@ -608,7 +634,7 @@ def fit_cone(P, N, w=None) -> Surface | None:
     if not seeds:
         return None
     _, a0, x0 = min(seeds, key=lambda e: e[0])
-    sol = _run_lm(_cone_res(a0), X, wn, x0)
+    sol = _run_lm(_cone_res(a0), X, wn, x0, give_up)
     if sol is None:
         return None
     t = sol[0]
@@ -651,7 +677,7 @@ def _revolution_axis(X, N, wn):
     return a, np.cross(a, mom)
 
 
-def fit_torus(P, N, w=None) -> Surface | None:
+def fit_torus(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | None:
     """Geometric least-squares torus.
 
     Seed: the axis is the line meeting all normal lines (each normal line of a surface of
@@ -667,6 +693,10 @@ def fit_torus(P, N, w=None) -> Surface | None:
         Unit normals (required).
     w : (p,) array_like, optional
         Non-negative weights.
+    give_up_rms : float, optional
+        Stop iterating once the rms (model units) stays above this and improves by less than
+        LM_GIVE_UP_GAIN per iteration (:func:`fit_surface` passes GIVE_UP_FACTOR * tol); the
+        result is then a partly refined fit.
 
     Returns
     -------
@@ -692,6 +722,7 @@ def fit_torus(P, N, w=None) -> Surface | None:
         return None
     m, sc = _normalise(P, wn)
     X = (P - m) / sc
+    give_up = math.inf if give_up_rms is None else (give_up_rms / sc) ** 2
     Xs, Ns, ws = _seed_sample(X, N, wn)
     seeds = [_torus_seed(Xs, Ns, ws, *_revolution_axis(Xs, Ns, ws)), _spine_seed(Xs, Ns, ws)]
     costs = []
@@ -701,7 +732,7 @@ def fit_torus(P, N, w=None) -> Surface | None:
     if not costs:
         return None
     _, a0, x0 = min(costs, key=lambda e: e[0])
-    sol = _run_lm(_torus_res(a0), X, wn, x0)
+    sol = _run_lm(_torus_res(a0), X, wn, x0, give_up)
     if sol is None:
         return None
     t = sol[0]
@@ -931,7 +962,8 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
         raise MeshError(f"tol must be a finite positive float, got {tol!r}")
     chosen = best = None
     for kind in (k for k in SURFACE_KINDS[:-1] if k in kinds):
-        s = _FITTERS[kind](P, N, wn)
+        kw = {} if kind == "plane" else {"give_up_rms": GIVE_UP_FACTOR * tol}
+        s = _FITTERS[kind](P, N, wn, **kw)
         if s is None:
             continue
         best = s if best is None or s.rms < best.rms else best

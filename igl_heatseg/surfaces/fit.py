@@ -12,7 +12,9 @@ cones and tori"; Eberly, "Least squares fitting of data"):
 * cone: axis = normal of the plane through the normal vectors (they lie on a small circle), then
   the cross-section centre and a line ``r = r0 + h tan(psi)`` through the (height, radius) pairs;
 * torus: axis = the line meeting all normal lines (a 6x6 Pluecker eigenproblem), then the tube
-  circle in the (radius, height) half-plane.
+  circle in the (radius, height) half-plane; or, robust to normal noise on thin tubes
+  (fillets), the minor radius that makes the tube centres ``p - r n`` coplanar, their plane's
+  normal as axis and their circle as spine. The seed that fits better is refined.
 
 The iterations work on centred, unit-spread coordinates and use parameterisations that stay
 regular as a kind degenerates into a simpler one (curvature instead of radius for spheres and
@@ -71,8 +73,8 @@ LM_XTOL = 1e-10
 #: Stop at this cost (weighted mean squared residual, unit-spread coordinates): residuals of
 #: 1e-14 of the spread are round-off, and LM steps would only be rejected from there on.
 LM_EXACT_COST = 1e-28
-#: With a give-up level (fit_surface: GIVE_UP_FACTOR times what a candidate must reach to
-#: matter), stop once the cost is above it and an iteration gains less than this fraction.
+#: With a give-up level (fit_surface: GIVE_UP_FACTOR * tol), stop once the cost is above it and
+#: an iteration gains less than this fraction.
 LM_GIVE_UP_GAIN = 1e-2
 #: Forward-difference step for the Jacobian (unit-spread coordinates, ~ sqrt(machine eps)).
 FD_STEP = 1e-7
@@ -970,6 +972,8 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
         if chosen is None or _clearly_better(s, chosen, tol):
             chosen = s
         if _ok(s, tol):
+            log.debug("fit_surface: %s (rms %.3g, tol %.3g; %s within)", chosen.kind,
+                      chosen.rms, tol, kind)
             return _with_area(chosen, w)
     rms, dev = (best.rms, best.max_dev) if best is not None else (math.nan, math.nan)
     return Surface("freeform", {"centroid": m}, rms=rms, max_dev=dev, area=_area(w))

@@ -92,3 +92,42 @@ def test_component_without_seed_is_rejected():
     group[0] = 0
     with pytest.raises(ValueError, match="hold no seed"):
         HeatSolver(V, F, group)
+
+
+def test_partial_argmax_agrees_with_labels_and_dense_argmax():
+    """HeatSolver.argmax (the fast solver's exact fallback) is the same streaming argmax as
+    labels(): over all groups it gives labels() at the items asked; over a subset of groups
+    (more than one batch) the dense argmax over those columns, ties to the lowest id."""
+    V, F = sphere(3)
+    k, group = seed_groups(F, np.random.default_rng(4).random(len(V)) < 0.3)
+    assert k > 40  # more than one batch of SOLVE_BATCH fields
+    solver = HeatSolver(V, F, group)
+    hl = solver.labels()
+    s = solver.system
+    rng = np.random.default_rng(0)
+    vs = np.sort(rng.choice(s.nf, 40, replace=False))
+    fs = np.sort(rng.choice(len(F), 60, replace=False))
+    r = solver.argmax(np.arange(k), vs, fs)
+    np.testing.assert_array_equal(r.vertex_labels, hl.vertex_labels[s.free[vs]])
+    np.testing.assert_array_equal(r.face_labels, hl.face_labels[fs])
+    np.testing.assert_allclose(r.vertex_max, hl.vertex_max[s.free[vs]], atol=1e-12)
+    assert r.error < 1e-10  # the solves' relative residual
+    gs = np.arange(1, k, 2)
+    r = solver.argmax(gs, vs, fs)
+    U = solver.temperatures(gs)
+    np.testing.assert_array_equal(r.vertex_labels, gs[U[s.free[vs]].argmax(axis=1)])
+    np.testing.assert_array_equal(r.face_labels, gs[U[F[fs]].mean(axis=1).argmax(axis=1)])
+
+
+def test_sparse_cholesky_solves_and_reports_backend():
+    from igl_heatseg.heat.factor import SparseCholesky
+
+    V, F = grid(8, 8)
+    k, group = seed_groups(F, np.isclose(V[:, 0], 0) | np.isclose(V[:, 0], 1))
+    s = HeatSolver(V, F, group).system
+    fac = SparseCholesky(s.A, 1)
+    assert fac.backend == "libigl"  # few right-hand sides: libigl's LLT
+    B = s.B.toarray()
+    X = fac.solve(B)
+    np.testing.assert_allclose(s.A @ X, B, atol=1e-12)
+    np.testing.assert_allclose(fac.solve(B[:, 0]), X[:, 0])

@@ -26,7 +26,7 @@ def test_meshError_is_a_valueerror():
     "V,F,match",
     [
         (np.zeros((3, 2)), [[0, 1, 2]], r"`V` should have shape \(n,3\), shape is \(3, 2\)"),
-        (TRI, [[0, 1, 2, 0]], r"`F` should have shape \(m,3\)"),
+        (TRI, [[0, 1]], r"`F` should have shape \(m,3\)"),
         (TRI, [[0.0, 1.5, 2.0]], "integer vertex indices"),
         (TRI, np.array([["a", "b", "c"]]), "integer vertex indices"),
         (np.array([["x", "y", "z"]]), [[0, 0, 0]], "must hold numbers"),

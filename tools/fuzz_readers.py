@@ -406,6 +406,9 @@ def main(argv: list[str] | None = None) -> int:
             per_format[fmt][kind] += 1
             if kind == "clean" and path.name not in detail:
                 unnamed += 1
+                causes.setdefault("clean error not naming the file", []).append(
+                    f"case {i} ({fmt}, {'+'.join(names)}): {detail}"
+                )
             if kind in ("traceback", "multiline"):
                 key = kind + ": " + re.sub(r"case\d+\.\w+", "FILE", detail.split(":")[0] if kind == "traceback" else re.sub(r"\d+", "N", detail[:60]))
                 ex = causes.setdefault(key, [])

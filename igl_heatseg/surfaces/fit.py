@@ -76,8 +76,6 @@ LM_EXACT_COST = 1e-28
 #: With a give-up level (fit_surface: GIVE_UP_FACTOR * tol), stop once the cost is above it and
 #: an iteration gains less than this fraction.
 LM_GIVE_UP_GAIN = 1e-2
-#: Forward-difference step for the Jacobian (unit-spread coordinates, ~ sqrt(machine eps)).
-FD_STEP = 1e-7
 #: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
 #: well-spread samples the fitted parameters change by far less than the noise.
 LM_MAX_POINTS = 1500
@@ -241,24 +239,18 @@ def _nearest_to_lines(X, D, w):
 
 
 def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
-    """Levenberg-Marquardt on ``res(x) -> (p,)`` weighted residuals (forward-difference
-    Jacobian). Returns the parameters and the cost ``|res|^2``, or ``None`` if ``res(x0)`` is
-    not finite. Stops early while the cost is above ``give_up`` and creeping."""
+    """Levenberg-Marquardt on weighted residuals ``res(x, True) -> (r (p,), J (p, k))``.
+    Returns the parameters and the cost ``|r|^2``, or ``None`` if ``res(x0)`` is not finite.
+    Stops early while the cost is above ``give_up`` and creeping."""
     x = np.asarray(x0, dtype=np.float64).copy()
-    r = res(x)
+    r, J = res(x, True)
     cost = float(r @ r)
-    if not math.isfinite(cost):
+    if not (math.isfinite(cost) and np.all(np.isfinite(J))):
         return None
     lam = 1e-3
-    k = len(x)
-    J = np.empty((len(r), k))
     for _ in range(max_iter):
         if cost <= LM_EXACT_COST:
             break
-        for j in range(k):
-            xj = x.copy()
-            xj[j] += FD_STEP
-            J[:, j] = (res(xj) - r) * (1.0 / FD_STEP)
         g, H = J.T @ r, J.T @ J
         D = np.diag(np.diag(H) + 1e-12 * (np.trace(H) + 1e-300))
         while lam < 1e12:
@@ -266,15 +258,15 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
                 step = np.linalg.solve(H + lam * D, -g)
             except np.linalg.LinAlgError:
                 step = np.linalg.lstsq(H + lam * D, -g, rcond=None)[0]
-            rn = res(x + step)
+            rn, Jn = res(x + step, True)
             cn = float(rn @ rn)
-            if math.isfinite(cn) and cn <= cost:
+            if math.isfinite(cn) and cn <= cost and np.all(np.isfinite(Jn)):
                 break
             lam *= 10.0
         else:
             break
         gain = cost - cn
-        x, r, cost = x + step, rn, cn
+        x, r, J, cost = x + step, rn, Jn, cn
         lam = max(lam * 0.1, 1e-12)
         if cost > give_up and gain < LM_GIVE_UP_GAIN * (cost + gain):
             break
@@ -313,6 +305,29 @@ def _curvature_seed(c, r, fallback_n):
     if dc <= 1e-6 * r:
         return fallback_n, r, 1.0 / r
     return -np.asarray(c) / dc, r - dc, 1.0 / r
+
+
+def _chart_d(a0, u0, v0, s, t):
+    """:func:`_chart` and its derivatives ``(2, 3)`` in ``s`` and ``t``."""
+    at = a0 + s * u0 + t * v0
+    L = math.sqrt(at @ at)  # >= 1: u0, v0 are normal to the unit a0
+    a = at / L
+    return a, np.array([u0 - (a @ u0) * a, v0 - (a @ v0) * a]) / L
+
+
+def _curv_dist_d(x, n, kappa):
+    """:func:`_curv_dist` ``D`` and its partial derivatives: ``(p, 3)`` in ``x``, ``(p, 3)`` in
+    ``n`` and ``(p,)`` in ``kappa``."""
+    xx = np.einsum("ij,ij->i", x, x)
+    wv = kappa * x + n
+    W = np.maximum(_rownorm(wv), 1e-300)
+    den = W + 1.0
+    D = (kappa * xx + 2.0 * (x @ n)) / den
+    q = D / den / W
+    Gx = (2.0 * kappa * x + 2.0 * n) / den[:, None] - (q * kappa)[:, None] * wv
+    Gn = 2.0 * x / den[:, None] - q[:, None] * wv
+    Gk = xx / den - q * np.einsum("ij,ij->i", x, wv)
+    return D, Gx, Gn, Gk
 
 
 def _curv_dist(x, n, kappa):
@@ -453,9 +468,15 @@ def fit_sphere(P, N=None, w=None, *, give_up_rms: float | None = None) -> Surfac
     u0, v0 = _frame(n0)
 
     def make_res(Xa, sw):
-        def res(t):
-            n = _chart(n0, u0, v0, t[0], t[1])
-            return sw * _curv_dist(Xa - t[2] * n, n, t[3])
+        def res(t, jac=False):
+            n, dn = _chart_d(n0, u0, v0, t[0], t[1])
+            x = Xa - t[2] * n
+            if not jac:
+                return sw * _curv_dist(x, n, t[3])
+            D, Gx, Gn, Gk = _curv_dist_d(x, n, t[3])
+            Gt = Gn - t[2] * Gx  # total derivative in n (x moves with n)
+            J = np.c_[Gt @ dn[0], Gt @ dn[1], -(Gx @ n), Gk]
+            return sw * D, J * sw[:, None]
         return res
 
     sol = _run_lm(make_res, X, wn, [0.0, 0.0, rho0, k0], give_up)
@@ -529,28 +550,45 @@ def fit_cylinder(P, N, w=None, *, give_up_rms: float | None = None) -> Surface |
     a0 = _least_eig((Ns * ws[:, None]).T @ Ns)[1]
     c = _cross_section_seed(Xs, Ns, ws, a0)
     r = math.nan if c is None else float(ws @ _rownorm(_perp(Xs - c, a0)))
-    fallback = _unit(_perp(_pca_normal(Xs, ws)[None], a0)[0])
-    n0, rho0, k0 = _curvature_seed(c, r, fallback)
     u0, v0 = _frame(a0)
+    pn = _perp(_pca_normal(Xs, ws)[None], a0)[0]  # along a0 for a closed cylinder
+    fallback = pn / np.linalg.norm(pn) if np.linalg.norm(pn) > 1e-6 else u0
+    n0, rho0, k0 = _curvature_seed(c, r, fallback)
     n0 = _unit(n0 - (n0 @ a0) * a0)
     b0 = _orth(a0, n0)
 
     def geometry(t):
-        a = _chart(a0, u0, v0, t[0], t[1])
-        n = math.cos(t[2]) * n0 + math.sin(t[2]) * b0
-        return a, _unit(n - (n @ a) * a)
+        a, da = _chart_d(a0, u0, v0, t[0], t[1])
+        mv = math.cos(t[2]) * n0 + math.sin(t[2]) * b0
+        mm = mv - (mv @ a) * a
+        L = max(math.sqrt(mm @ mm), 1e-300)  # 0 only if the axis turned onto n: rejected
+        return a, da, mv, mm / L, L
 
     def make_res(Xa, sw):
-        def res(t):
-            a, n = geometry(t)
-            return sw * _curv_dist(_perp(Xa - t[3] * n, a), n, t[4])
+        def res(t, jac=False):
+            a, da, mv, n, L = geometry(t)
+            Xa_a = Xa @ a
+            xp = Xa - t[3] * n - np.outer(Xa_a, a)  # n is normal to a
+            if not jac:
+                return sw * _curv_dist(xp, n, t[4])
+            D, Gx, Gn, Gk = _curv_dist_d(xp, n, t[4])
+            Pn = np.eye(3) - np.outer(n, n)
+            dmv = -math.sin(t[2]) * n0 + math.cos(t[2]) * b0
+            dns = [Pn @ (-(mv @ d) * a - (mv @ a) * d) / L for d in da]
+            dns.append(Pn @ (dmv - (dmv @ a) * a) / L)
+            Ga = Gx @ a
+            cols = [Gn @ dn - t[3] * (Gx @ dn) for dn in dns]
+            for j in (0, 1):  # xp also moves with a directly
+                cols[j] = cols[j] - (Xa @ da[j]) * Ga - Xa_a * (Gx @ da[j])
+            J = np.stack(cols + [-(Gx @ n), Gk], axis=1)
+            return sw * D, J * sw[:, None]
         return res
 
     sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0], give_up)
     if sol is None or abs(sol[0][4]) * FAR_RATIO <= 1.0:
         return None
     t = sol[0]
-    a, n = geometry(t)
+    a, _, _, n, _ = geometry(t)
     foot = _perp((t[3] - 1.0 / t[4]) * n[None], a)[0]
     params = {"point": m + sc * foot, "axis": a, "radius": float(sc / abs(t[4]))}
     return _finish("cylinder", params, P, N, wn, _area(w))
@@ -656,12 +694,22 @@ def _cone_res(a0):
     u0, v0 = _frame(a0)
 
     def make_res(Xa, sw):
-        def res(t):
-            a = _chart(a0, u0, v0, t[0], t[1])
+        def res(t, jac=False):
+            a, da = _chart_d(a0, u0, v0, t[0], t[1])
             x = Xa - (t[2] * u0 + t[3] * v0)
             h = x @ a
-            r = _rownorm(x - np.outer(h, a))
-            return sw * ((r - t[4]) * math.cos(t[5]) - h * math.sin(t[5]))
+            Rv = x - np.outer(h, a)
+            r = _rownorm(Rv)
+            cp, sp = math.cos(t[5]), math.sin(t[5])
+            d = (r - t[4]) * cp - h * sp
+            if not jac:
+                return sw * d
+            U = Rv / np.maximum(r, 1e-300)[:, None]
+            gx = cp * U - sp * a  # d(d)/dx
+            ga = -cp * h[:, None] * U - sp * x  # d(d)/da (dr/da = -h U)
+            J = np.c_[ga @ da[0], ga @ da[1], -(gx @ u0), -(gx @ v0), np.full(len(d), -cp),
+                      -(r - t[4]) * sp - h * cp]
+            return sw * d, J * sw[:, None]
         return res
 
     return make_res
@@ -811,12 +859,23 @@ def _torus_res(a0):
     u0, v0 = _frame(a0)
 
     def make_res(Xa, sw):
-        def res(t):
-            a = _chart(a0, u0, v0, t[0], t[1])
+        def res(t, jac=False):
+            a, da = _chart_d(a0, u0, v0, t[0], t[1])
             x = Xa - (t[2] * u0 + t[3] * v0)
             h = x @ a
-            rho = _rownorm(x - np.outer(h, a))
-            return sw * (np.hypot(rho - t[5], h - t[4]) - t[6])
+            Rv = x - np.outer(h, a)
+            rho = _rownorm(Rv)
+            e = np.hypot(rho - t[5], h - t[4])
+            if not jac:
+                return sw * (e - t[6])
+            es = np.maximum(e, 1e-300)
+            g0, g1 = (rho - t[5]) / es, (h - t[4]) / es  # unit direction in the half-plane
+            U = Rv / np.maximum(rho, 1e-300)[:, None]
+            gx = g0[:, None] * U + g1[:, None] * a
+            ga = -(g0 * h)[:, None] * U + g1[:, None] * x
+            J = np.c_[ga @ da[0], ga @ da[1], -(gx @ u0), -(gx @ v0), -g1, -g0,
+                      np.full(len(e), -1.0)]
+            return sw * (e - t[6]), J * sw[:, None]
         return res
 
     return make_res

@@ -2,15 +2,26 @@
 
 from __future__ import annotations
 
+import dataclasses
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib")
 
 from igl_heatseg.viz import plots  # noqa: E402
-from igl_heatseg.viz.core import ChartMap  # noqa: E402
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+FANDISK = Path(__file__).resolve().parent.parent / "data" / "fandisk.off"
+
+
+@pytest.fixture(scope="module")
+def fandisk_run():
+    from igl_heatseg.io import load_mesh
+    from igl_heatseg.pipeline import run_pipeline
+
+    return run_pipeline(load_mesh(FANDISK))
 
 
 def test_area_threshold_is_eps_times_largest():
@@ -44,12 +55,10 @@ def test_area_plot_bars_line_and_legend(tmp_path):
 
 
 def test_area_plot_matches_segmentation_eps_round():
-    from pathlib import Path
-
     from igl_heatseg.io.meshes import load_mesh
     from igl_heatseg.segmentation.paper import segment_mesh
 
-    seg = segment_mesh(load_mesh(Path(__file__).resolve().parent.parent / "data" / "fandisk.off"))
+    seg = segment_mesh(load_mesh(FANDISK))
     fig = plots.plot_area_distribution(seg.initial_areas, seg.eps)
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert f"kept: {len(seg.kept_groups)} groups" in labels
@@ -69,32 +78,34 @@ def test_area_plot_rejects_bad_input(areas, eps, msg):
         plots.plot_area_distribution(areas, eps)
 
 
-def _square_chart(label, flipped=()):
-    UV = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
-    F = np.array([[0, 1, 2], [0, 2, 3]])
-    return ChartMap(
-        faces=np.array([0, 1]) + 2 * label,
-        F=F,
-        UV=UV,
-        vertex_map=np.arange(4),
-        label=label,
-        bijective=not flipped,
-        flipped_faces=np.array(flipped, int),
+def _with_flips(chart, flipped):
+    """The chart with its map marked not bijective, ``flipped`` (rows of ``cut.F``) flipped."""
+    p = chart.param
+    cert = dataclasses.replace(p.certificate, flipped_faces=np.asarray(flipped, dtype=np.int64))
+    return dataclasses.replace(
+        chart, param=dataclasses.replace(p, bijective=False, certificate=cert)
     )
 
 
-def test_chart_maps_one_panel_per_chart_and_flips_red(tmp_path):
-    V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+def test_chart_maps_one_panel_per_chart_and_flips_red(fandisk_run, tmp_path):
+    V = fandisk_run.mesh.V
+    a, b = fandisk_run.charts[:2]
+    unmapped = dataclasses.replace(fandisk_run.charts[2], cut=None, param=None)
     out = tmp_path / "charts.png"
-    fig = plots.plot_chart_maps([_square_chart(0), _square_chart(1, flipped=[1])], V, out)
+    fig = plots.plot_chart_maps([a, _with_flips(b, [1]), unmapped], V, out)
     assert out.read_bytes()[:8] == PNG_MAGIC
-    drawn = [ax for ax in fig.axes if ax.collections]
-    assert len(drawn) == 2
-    cols = drawn[1].collections[0].get_facecolors()
+    drawn = {ax.get_title().split(" (")[0]: ax for ax in fig.axes if ax.collections}
+    assert set(drawn) == {f"chart {a.id}", f"chart {b.id}"}  # the chart without a map skipped
+    ax = drawn[f"chart {b.id}"]
+    cols = ax.collections[0].get_facecolors()
+    assert len(cols) == len(b.cut.F)
     assert np.allclose(cols[1][:3], (1, 0, 0)) and not np.allclose(cols[0][:3], (1, 0, 0))
-    assert "NOT bijective" in drawn[1].get_title()
+    assert "NOT bijective" in ax.get_title() and b.param.method in ax.get_title()
+    assert " bijective" in drawn[f"chart {a.id}"].get_title()
     with pytest.raises(ValueError, match="no charts"):
         plots.plot_chart_maps([], V)
+    with pytest.raises(ValueError, match="no charts"):
+        plots.plot_chart_maps([unmapped], V)
 
 
 def test_sweep_plot(tmp_path):

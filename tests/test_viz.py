@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import dataclasses
 import json
 import os
 import subprocess
@@ -23,7 +24,7 @@ from igl_heatseg.errors import MeshError
 from igl_heatseg.segmentation.paper import segment_mesh
 
 ps = pytest.importorskip("polyscope")
-viz = pytest.importorskip("igl_heatseg.viz.core")
+viz = pytest.importorskip("igl_heatseg.viz")
 from igl_heatseg.cli.viz import register, view_file  # noqa: E402
 
 DATA = Path(__file__).resolve().parent.parent / "data"
@@ -143,17 +144,21 @@ def test_segment_boundary_edges_of_box(box):
     assert len(viz.segment_boundary_edges(F, np.zeros(len(F), int))) == 0
 
 
-def test_as_chart_maps_rejects_incomplete_charts():
-    with pytest.raises(TypeError, match="chart 0"):
-        viz.as_chart_maps([{"faces": [0], "F": [[0, 1, 2]]}])
-    assert viz.as_chart_maps(None) == []
+def test_drawable_charts_skips_charts_without_a_map(box, box_charts):
+    mesh, _ = box
+    _, charts = box_charts
+    bare = dataclasses.replace(charts[0], cut=None, param=None)  # a non-disk under cut="none"
+    assert [c.id for c in viz.drawable_charts([bare, *charts[1:]])] == [1, 2, 3, 4, 5]
+    assert viz.drawable_charts(None) == []
+    UVc = viz.corner_uv(mesh.V, mesh.F, [bare, *charts[1:]]).reshape(-1, 3, 2)
+    assert not UVc[charts[0].faces].any() and UVc[charts[1].faces].any()  # no map: blank
 
 
 def test_corner_uv_matches_3d_area_and_layout_does_not_overlap(box, box_charts):
     mesh, _ = box
     seg, charts = box_charts
-    cm = viz.as_chart_maps(charts)
-    assert len(cm) == 6 and all(c.bijective for c in cm)
+    cm = viz.drawable_charts(charts)
+    assert len(cm) == 6 and all(c.param.bijective for c in cm)
     UVc = viz.corner_uv(mesh.V, mesh.F, cm).reshape(-1, 3, 2)
     a, b = UVc[:, 1] - UVc[:, 0], UVc[:, 2] - UVc[:, 0]
     a2 = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
@@ -167,7 +172,7 @@ def test_corner_uv_matches_3d_area_and_layout_does_not_overlap(box, box_charts):
         assert a2[c.faces].sum() == pytest.approx(a3[c.faces].sum(), rel=1e-9)
     boxes = []
     for c, uv in zip(cm, viz.chart_layout(mesh.V, cm), strict=True):
-        used = uv[np.unique(c.F)]
+        used = uv[np.unique(c.cut.F)]
         boxes.append((used.min(axis=0), used.max(axis=0)))
     for i in range(len(boxes)):
         for j in range(i + 1, len(boxes)):

@@ -15,17 +15,10 @@ from ..io import load_mesh
 from ..pipeline import run_pipeline
 from ..segmentation import segment_with_mode
 from ..segmentation.params import MODE_DEFAULTS
-from ..viz.core import (
-    CHART_STAGES,
-    DEFAULT_SIZE,
-    STAGES,
-    Stage,
-    build_scene,
-    init_polyscope,
-    render_scene,
-    scene_points,
-    set_camera,
-)
+from ..viz.camera import DEFAULT_SIZE
+from ..viz.layout import scene_points
+from ..viz.render import render_scene, set_camera
+from ..viz.scene import CHART_STAGES, STAGES, Stage, build_scene, init_polyscope
 from .common import add_segment_arguments
 
 __all__ = ["register", "render_file", "view_file", "load_and_run"]

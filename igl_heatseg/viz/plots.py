@@ -9,13 +9,17 @@ from __future__ import annotations
 import logging
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..segmentation.params import check_segment_params, eps_keep
-from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    from ..pipeline import Chart
 
 __all__ = ["area_threshold", "plot_area_distribution", "plot_chart_maps", "plot_sweep"]
 
@@ -146,6 +150,22 @@ def plot_area_distribution(
         fig, ax = plt.subplots(figsize=(8, 4.5))
     else:
         fig = ax.figure
+    eps_label = (
+        f"eps * {'A_component' if reference == 'component' else 'A_largest'} = "
+        f"{eps:g} * {ref_area:.3g} = {thr:.3g}"
+        + (" (largest component)" if len(np.unique(comp)) > 1 else "")
+    )
+    _area_bars(ax, a, kept, thr, eps_label)
+    _area_axes(ax, a, log_scale, title)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(Path(path), dpi=DPI)
+        log.info("wrote %s", path)
+    return fig
+
+
+def _area_bars(ax, a: np.ndarray, kept: np.ndarray, thr: float, eps_label: str) -> None:
+    """Bars of the sorted areas ``a`` (kept blue, dropped grey) and the dashed eps line."""
     x = np.arange(1, a.size + 1)
     width = 0.8 if a.size < 200 else 1.0
     ax.bar(x[kept], a[kept], width=width, color=KEPT_COLOR, label=f"kept: {int(kept.sum())} groups")
@@ -156,39 +176,30 @@ def plot_area_distribution(
         color=DROPPED_COLOR,
         label=f"dropped: {int((~kept).sum())} groups",
     )
-    ax.axhline(
-        thr,
-        color=EPS_LINE_COLOR,
-        lw=1.5,
-        ls="--",
-        label=f"eps * {'A_component' if reference == 'component' else 'A_largest'} = "
-        f"{eps:g} * {ref_area:.3g} = {thr:.3g}"
-        + (" (largest component)" if len(np.unique(comp)) > 1 else ""),
-    )
+    ax.axhline(thr, color=EPS_LINE_COLOR, lw=1.5, ls="--", label=eps_label)
+
+
+def _area_axes(ax, a: np.ndarray, log_scale: bool, title: str | None) -> None:
+    """Scales, limits, labels, title and legend of the area plot (``a`` sorted, decreasing)."""
     if log_scale:
         pos = a[a > 0]
         ax.set_yscale("log")
         if pos.size:
             ax.set_ylim(pos.min() * 0.5, a[0] * 2)
-    if a.size > LOG_RANK_ABOVE:
+    many = a.size > LOG_RANK_ABOVE
+    if many:
         ax.set_xscale("log")
         ax.set_xlim(0.5, a.size * 1.1)
     else:
         ax.set_xlim(0.3, a.size + 0.7)
-    many = a.size > LOG_RANK_ABOVE
     ax.set_xlabel("initial segment, sorted by area" + (" (rank, log scale)" if many else ""))
     ax.set_ylabel("area" + (" (log scale)" if log_scale else ""))
     ax.set_title(title or "Initial segment areas")
     ax.legend(loc="upper right", fontsize=9)
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(Path(path), dpi=DPI)
-        log.info("wrote %s", path)
-    return fig
 
 
 def plot_chart_maps(
-    charts,
+    charts: Iterable[Chart],
     V: ArrayLike,
     path: str | os.PathLike | None = None,
     *,
@@ -200,8 +211,9 @@ def plot_chart_maps(
 
     Parameters
     ----------
-    charts : iterable
-        Chart maps (see :func:`igl_heatseg.viz.core.as_chart_maps`).
+    charts : iterable of igl_heatseg.pipeline.Chart
+        Charts without a map are not drawn (:func:`igl_heatseg.viz.layout.drawable_charts`);
+        panel titles number charts by ``Chart.id``.
     V : (n, 3) array_like of float
         Vertices of the whole mesh.
     path : str or path-like, optional
@@ -216,44 +228,56 @@ def plot_chart_maps(
     Returns
     -------
     matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        No chart has a map.
     """
     from matplotlib.collections import PolyCollection
 
     from ..io.results import label_colors
-    from .core import as_chart_maps
+    from .layout import drawable_charts
 
     plt = _pyplot()
-    ch = as_chart_maps(charts)
+    ch = drawable_charts(charts)
     if not ch:
         raise ValueError("no charts to plot")
-    order = sorted(range(len(ch)), key=lambda i: -len(ch[i].F))[:max_charts]
+    order = sorted(range(len(ch)), key=lambda i: -len(ch[i].cut.F))[:max_charts]
     n = len(order)
     ncols = ncols or int(np.ceil(np.sqrt(n)))
     nrows = int(np.ceil(n / ncols))
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.2 * ncols, 3.2 * nrows), squeeze=False)
-    pal = label_colors(max(c.label for c in ch) + 1) / 255.0
+    pal = label_colors(max(c.segment for c in ch) + 1) / 255.0
     for ax in axes.ravel():
         ax.set_axis_off()
     for ax, i in zip(axes.ravel(), order, strict=False):  # more panels than charts
-        c = ch[i]
-        tri = c.UV[c.F]
-        col = np.tile(pal[c.label], (len(c.F), 1))
-        if len(c.flipped_faces):
-            col[c.flipped_faces] = (1.0, 0.0, 0.0)
-        pc = PolyCollection(
-            tri, facecolors=col, edgecolors=(0, 0, 0, 0.35) if edges else "none", linewidths=0.15
-        )
-        ax.add_collection(pc)
-        ax.set_xlim(tri[..., 0].min(), tri[..., 0].max())
-        ax.set_ylim(tri[..., 1].min(), tri[..., 1].max())
-        ax.set_aspect("equal")
-        status = "" if c.bijective is None else (" bijective" if c.bijective else " NOT bijective")
-        meth = f" {c.method}" if c.method else ""
-        ax.set_title(f"chart {i} ({len(c.F)} tri){meth}{status}", fontsize=8)
+        _chart_panel(ax, ch[i], pal, edges, PolyCollection)
     fig.tight_layout()
     if path is not None:
         fig.savefig(Path(path), dpi=DPI)
     return fig
+
+
+def _chart_panel(ax, c: Chart, pal: np.ndarray, edges: bool, PolyCollection) -> None:
+    """One chart's map in ``ax``: faces in the segment's colour, flipped ones red."""
+    F = np.asarray(c.cut.F, dtype=np.int64)
+    tri = np.asarray(c.param.UV, dtype=np.float64)[:, :2][F]
+    col = np.tile(pal[c.segment], (len(F), 1))
+    cert = c.param.certificate
+    if cert is not None and len(cert.flipped_faces):
+        col[np.asarray(cert.flipped_faces, dtype=np.int64)] = (1.0, 0.0, 0.0)
+    pc = PolyCollection(
+        tri, facecolors=col, edgecolors=(0, 0, 0, 0.35) if edges else "none", linewidths=0.15
+    )
+    ax.add_collection(pc)
+    ax.set_xlim(tri[..., 0].min(), tri[..., 0].max())
+    ax.set_ylim(tri[..., 1].min(), tri[..., 1].max())
+    ax.set_aspect("equal")
+    bij = c.param.bijective
+    status = "" if bij is None else (" bijective" if bij else " NOT bijective")
+    meth = f" {c.param.method}" if c.param.method else ""
+    ax.set_title(f"chart {c.id} ({len(F)} tri){meth}{status}", fontsize=8)
 
 
 def plot_sweep(

@@ -48,8 +48,8 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
-from ..mesh.checks import as_mesh_arrays
 from ..errors import MeshError
+from ..mesh.checks import as_mesh_arrays
 
 __all__ = [
     "hlle_energy",
@@ -94,6 +94,13 @@ def vertex_neighborhoods(
     N : (n, n) scipy.sparse.csr_matrix of bool
         ``N[i, j]`` is True when ``j`` is in the neighbourhood of ``i``; the diagonal is set.
         Vertices not referenced by ``F`` have only themselves.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> N = vertex_neighborhoods(4, np.array([[0, 1, 2], [0, 2, 3]]))
+    >>> N.sum(axis=1).A1.tolist()  # a 4-vertex chart: everything
+    [4, 4, 4, 4]
     """
     ii = F[:, [0, 1, 2, 1, 2, 0]].ravel()
     jj = F[:, [1, 2, 0, 0, 1, 2]].ravel()
@@ -369,8 +376,25 @@ def _quadratic_rows(
         Xb = X[bad]
         Xp[bad] = np.linalg.pinv(Xb)
         Rb = np.eye(k)[None] - Xb @ Xp[bad]
-        Hq[bad] = np.linalg.pinv(Rb @ Q[bad], rcond=rcond) @ Rb
+        Hq[bad] = _truncated_pinv(Rb @ Q[bad], k - np.linalg.matrix_rank(Xb), rcond) @ Rb
     return Hq, Xp, Q
+
+
+def _truncated_pinv(A: np.ndarray, rank: np.ndarray, rcond: float) -> np.ndarray:
+    """Batched pseudo-inverse of (b, k, 3) ``A`` keeping at most ``rank[i]`` singular values
+    (and only those above ``rcond`` times the largest).
+
+    ``A = R Q`` has rank at most ``rank(R) = k - rank(X)``: with fewer than 6 neighbourhood
+    vertices (tiny charts) that is below 3, and the singular values beyond it are rounding
+    noise of ``R`` (``R X`` ~ 1e-16, not 0).  A relative cutoff alone keeps such a value when
+    it lands above ``rcond * s_max`` (5-vertex flat fan: 4.3e-16 against 3.7e-16), and its
+    inverse, ~1e15, turns ``R X ~ 1e-16`` into ``H X ~ 1``: affine functions left the null
+    space.  The structural rank drops it whatever its rounding.
+    """
+    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    keep = (s > rcond * s[:, :1]) & (np.arange(s.shape[1])[None, :] < rank[:, None])
+    sinv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    return (Vt.transpose(0, 2, 1) * sinv[:, None, :]) @ U.transpose(0, 2, 1)
 
 
 def _fit_graph(u, v, w):
@@ -599,6 +623,17 @@ def curved_hessian_energy(V: ArrayLike, F: ArrayLike) -> sp.csr_matrix:
     ------
     MeshError
         On bad array shapes or indices.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.arange(4.0), np.arange(4.0))
+    >>> V = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    >>> i = np.arange(16).reshape(4, 4)[:-1, :-1].ravel()
+    >>> F = np.concatenate([np.stack([i, i + 1, i + 5], 1), np.stack([i, i + 5, i + 4], 1)])
+    >>> K = curved_hessian_energy(V, F)
+    >>> bool(np.abs(K @ V[:, 0]).max() < 1e-8 * abs(K).max())
+    True
     """
     V, F = as_mesh_arrays(V, F, "curved_hessian_energy")
     n = V.shape[0]
@@ -621,6 +656,13 @@ def hessian_energy(
     -------
     K : (n, n) scipy.sparse.csr_matrix
         Symmetric Hessian energy (see the two functions for definiteness).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> K = hessian_energy(np.eye(3), np.array([[0, 1, 2]]), "curved")
+    >>> K.shape
+    (3, 3)
     """
     if energy == "hlle":
         return hlle_energy(V, F, **kwargs)

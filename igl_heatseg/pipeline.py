@@ -5,9 +5,11 @@
 1. :func:`igl_heatseg.segmentation.paper.segment_with_mode` (the paper's §3.1-3.4, or robust mode);
 2. one chart per face-connected piece of each segment; user cut paths (paper §3.5: the ends of
    a generatrix, vertex ids of the *input* mesh) are assigned to the chart holding both ends
-   and cut with :func:`igl_heatseg.parameterization.cut.cut_along_paths`; with ``cut="auto"`` every chart that
-   is still not a disk is cut by :func:`igl_heatseg.parameterization.cut.cut_to_disk`;
-3. :func:`igl_heatseg.parameterization.param.parameterize_chart` (Hessian eigenmap, certified, with fallback);
+   and cut with :func:`igl_heatseg.parameterization.cut.cut_along_paths`; with ``cut="auto"``
+   every chart that is still not a disk is cut by
+   :func:`igl_heatseg.parameterization.cut.cut_to_disk`;
+3. :func:`igl_heatseg.parameterization.chart.parameterize_chart` (Hessian eigenmap, certified,
+   with fallback);
 4. :func:`igl_heatseg.parameterization.atlas.pack_charts` (areas follow the 3D areas);
 and returns a :class:`PipelineResult`. Writing it is the caller's step:
 :func:`igl_heatseg.io.results.write_run` writes everything ``segment`` writes plus
@@ -34,10 +36,9 @@ from .errors import MeshError
 from .mesh.checks import CleanMesh
 from .mesh.geometry import face_areas
 from .mesh.topology import face_components
-from .parameterization import param as param_mod
 from .parameterization.atlas import atlas_corner_uv, pack_charts
+from .parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
 from .parameterization.cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
-from .parameterization.param import parameterize_chart
 from .segmentation.api import segment_with_mode
 from .segmentation.params import resolve_params
 
@@ -206,7 +207,7 @@ def run_pipeline(
     theta, eps : float, optional
         Segmentation parameters; ``None`` takes the mode's defaults (paper: Table 1).
     energy : {"auto", "hlle", "curved"}
-        Hessian energy for :func:`igl_heatseg.parameterization.param.parameterize_chart`: the paper's HLLE,
+        Hessian energy for :func:`igl_heatseg.parameterization.chart.parameterize_chart`: the paper's HLLE,
         libigl's curved Hessian, or ``"auto"`` (default): HLLE, and the curved Hessian for
         charts whose HLLE map is not bijective (measured: the fewest fallbacks on every
         mesh of the shared data set).
@@ -227,7 +228,7 @@ def run_pipeline(
     hlle_skip_curvature : float, None or "default"
         With ``energy="auto"``, charts whose total absolute Gaussian curvature exceeds this
         skip HLLE (recorded in each chart's ``attempts``); ``"default"``:
-        :data:`igl_heatseg.parameterization.param.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
+        :data:`igl_heatseg.parameterization.chart.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
 
     Returns
     -------
@@ -247,7 +248,7 @@ def run_pipeline(
     (1, 1)
     """
     if isinstance(hlle_skip_curvature, str) and hlle_skip_curvature == "default":
-        hlle_skip_curvature = param_mod.HLLE_SKIP_CURVATURE
+        hlle_skip_curvature = HLLE_SKIP_CURVATURE
 
     if cut not in ("auto", "none"):
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")

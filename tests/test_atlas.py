@@ -6,6 +6,7 @@ import igl
 import numpy as np
 import pytest
 
+from igl_heatseg.errors import MeshError
 from igl_heatseg.io.results import write_atlas_obj, write_chart_obj
 from igl_heatseg.parameterization.atlas import (
     atlas_corner_uv,
@@ -14,7 +15,6 @@ from igl_heatseg.parameterization.atlas import (
     pack_charts,
 )
 from igl_heatseg.parameterization.cut import cut_to_disk
-from igl_heatseg.errors import MeshError
 
 #: Exactness of coordinates re-read from OBJ files written with 17 significant digits.
 OBJ_ROUNDTRIP_TOL = 0.0
@@ -108,7 +108,7 @@ def test_min_area_rotation_of_rotated_rectangle():
 
 
 def _hull_reference(P):
-    """Andrew's monotone chain on all points (what atlas._hull did before its filter)."""
+    """Andrew's monotone chain on all points (what atlas.convex_hull did before its filter)."""
     P = np.unique(P, axis=0)
     if len(P) < 3:
         return P
@@ -130,7 +130,7 @@ def _hull_reference(P):
 
 @pytest.mark.parametrize("kind", ["normal", "anisotropic", "circle", "lattice"])
 def test_filtered_hull_equals_the_full_monotone_chain(kind):
-    from igl_heatseg.parameterization.atlas import _hull
+    from igl_heatseg.parameterization.atlas import convex_hull
 
     rng = np.random.default_rng(7)
     for n in (3, 50, 200, 3000):
@@ -143,7 +143,7 @@ def test_filtered_hull_equals_the_full_monotone_chain(kind):
             P = np.c_[np.cos(t), np.sin(t)] * (1 - 1e-12 * rng.random((n, 1)))
         else:  # duplicates and collinear points
             P = np.round(rng.normal(size=(n, 2)) * 3)
-        np.testing.assert_array_equal(_hull(P), _hull_reference(P))
+        np.testing.assert_array_equal(convex_hull(P), _hull_reference(P))
 
 
 def test_obj_text_is_the_per_line_format(tmp_path, monkeypatch):

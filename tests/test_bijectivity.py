@@ -1,4 +1,5 @@
-"""Tests for igl_heatseg.parameterization.bijectivity: flips, mirror images, folds, boundary overlaps, winding."""
+"""Tests for igl_heatseg.parameterization.bijectivity: flips, mirror images, folds, boundary
+overlaps, winding."""
 
 from __future__ import annotations
 
@@ -7,15 +8,16 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from igl_heatseg.parameterization.bijectivity import (
-    _exact_orient,
-    _exact_orient_many,
-    boundary_self_intersections,
-    certify_map,
-    signed_areas,
-)
 from igl_heatseg.errors import MeshError
 from igl_heatseg.mesh.topology import boundary_loops
+from igl_heatseg.parameterization.bijectivity import (
+    boundary_self_intersections,
+    certify_map,
+    exact_orient,
+    exact_orient_many,
+    segments_intersect,
+    signed_areas,
+)
 
 
 def grid(nx, ny):
@@ -149,13 +151,11 @@ def test_grid_search_equals_brute_force_on_random_boundaries(seed, amp):
 
 
 def test_zero_length_segment_off_the_line_does_not_intersect():
-    from igl_heatseg.parameterization.bijectivity import _segments_intersect
-
     P = np.array([[0.5, 0.2]])  # a point inside the other segment's bounding box, off its line
     Q1, Q2 = np.array([[0.0, 0.0]]), np.array([[1.0, 1.0]])
-    assert not _segments_intersect(P, P, Q1, Q2)[0]
+    assert not segments_intersect(P, P, Q1, Q2)[0]
     on = np.array([[0.25, 0.25]])
-    assert _segments_intersect(on, on, Q1, Q2)[0]
+    assert segments_intersect(on, on, Q1, Q2)[0]
 
 
 def test_touching_boundary_counts_as_overlap():
@@ -208,9 +208,9 @@ def test_vectorised_exact_orientation_matches_rationals(rows):
     X = np.array(rows, dtype=np.float64)
     A, B, C = X[:, 0:2], X[:, 2:4], X[:, 4:6]
     ref = [
-        _exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
+        exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
     ]
-    assert _exact_orient_many(A, B, C).tolist() == ref
+    assert exact_orient_many(A, B, C).tolist() == ref
 
 
 def test_vectorised_exact_orientation_on_near_collinear_points():
@@ -219,9 +219,9 @@ def test_vectorised_exact_orientation_on_near_collinear_points():
     B = rng.normal(size=(500, 2))
     C = A + rng.normal(size=(500, 1)) * (B - A)  # collinear up to rounding
     C[::3] = A[::3]  # exactly coincident: orientation 0
-    got = _exact_orient_many(A, B, C)
+    got = exact_orient_many(A, B, C)
     ref = [
-        _exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
+        exact_orient(a.tolist(), b.tolist(), c.tolist()) for a, b, c in zip(A, B, C, strict=True)
     ]
     assert got.tolist() == ref
     assert np.all(got[::3] == 0) and np.any(got != 0)

@@ -8,6 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from igl_heatseg.errors import MeshError
+from igl_heatseg.mesh.topology import boundary_loops, face_components
 from igl_heatseg.parameterization.cut import (
     chart_topology,
     cut_along_path,
@@ -15,8 +17,6 @@ from igl_heatseg.parameterization.cut import (
     cut_mesh_along_edges,
     cut_to_disk,
 )
-from igl_heatseg.errors import MeshError
-from igl_heatseg.mesh.topology import boundary_loops, face_components
 
 #: Relative tolerance for a cut length against its analytic value on a regular mesh.
 LENGTH_RTOL = 0.03
@@ -567,13 +567,13 @@ def test_any_random_chart_becomes_a_manifold_disk(seed, drop, surface):
     # corners keep their input vertex: same faces up to the duplication
     np.testing.assert_array_equal(res.vertex_map[res.F], Fc)
     # the sort-free topology update agrees with edge_topology, corner by corner
-    from igl_heatseg.parameterization.cut import _open, _split_topology
     from igl_heatseg.mesh.topology import edge_topology
+    from igl_heatseg.parameterization.cut import open_wedges, split_topology
 
     topo = edge_topology(Fc)
     cut = rng.random(len(topo.E)) < 0.2
-    Fn, _ = _open(Fc, topo, cut)
-    fast, ref = _split_topology(topo, Fn), edge_topology(Fn)
+    Fn, _ = open_wedges(Fc, topo, cut)
+    fast, ref = split_topology(topo, Fn), edge_topology(Fn)
     np.testing.assert_array_equal(fast.E[fast.EMAP], ref.E[ref.EMAP])
     np.testing.assert_array_equal(fast.edge_face_count[fast.EMAP], ref.edge_face_count[ref.EMAP])
     np.testing.assert_array_equal(

@@ -1,4 +1,5 @@
-"""Tests for igl_heatseg.parameterization.param: Hessian eigenmaps, Gram correction, fallback, distortion."""
+"""Tests for the chart maps of igl_heatseg.parameterization: Hessian eigenmaps, Gram correction,
+fallbacks, distortion."""
 
 from __future__ import annotations
 
@@ -6,18 +7,15 @@ import numpy as np
 import pytest
 
 from igl_heatseg.errors import MeshError
-from igl_heatseg.parameterization.param import (
-    HLLE_SKIP_CURVATURE,
-    METHODS,
-    compare_methods,
-    distortion,
-    gram_correction,
+from igl_heatseg.parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
+from igl_heatseg.parameterization.distortion import distortion
+from igl_heatseg.parameterization.eigenmap import gram_correction
+from igl_heatseg.parameterization.fallback import mean_value_laplacian, repair_map, tutte_map
+from igl_heatseg.parameterization.methods import METHODS, compare_methods, map_chart
+from igl_heatseg.parameterization.prepare import (
+    certify_oriented,
     limit_blas_threads,
-    map_chart,
-    parameterize_chart,
-    repair_map,
     total_abs_curvature,
-    tutte_map,
 )
 
 #: Edge lengths of a flat chart after the Gram correction (issue 3: 1e-8).
@@ -245,15 +243,15 @@ def test_auto_energy_skips_hlle_on_scan_like_charts():
 
 
 def test_mirrored_certificate_is_the_recomputed_one():
-    """_finish turns a mirror image over without certifying it again: same certificate."""
+    """certify_oriented turns a mirror image over without certifying it again: same
+    certificate."""
     from igl_heatseg.parameterization.bijectivity import certify_map
-    from igl_heatseg.parameterization.param import _finish
 
     V, F = sphere_cap(2.4)
     for UV in (tutte_map(V, F), map_chart(V, F, "hessian-hlle", name="c").UV):
         M = UV * [-1.0, 1.0]
         assert certify_map(M, F).mirrored
-        UVf, cert = _finish(M, V, F, "c")
+        UVf, cert = certify_oriented(M, V, F, "c")
         ref = certify_map(UVf, F)
         assert not cert.mirrored and cert.orientation == 1
         assert cert.summary() == ref.summary()
@@ -305,10 +303,8 @@ def test_tutte_is_bijective_on_bad_triangles(weights):
 def test_mean_value_tutte_reproduces_flat_interior():
     """Mean value weights have linear precision: with the boundary at its own positions a flat
     chart's interior comes back exactly (uniform weights do not on a jittered grid)."""
-    from igl_heatseg.parameterization.param import _mean_value_laplacian
-
     V, F = grid(8, 8, jitter=0.3, seed=2)
-    L = _mean_value_laplacian(V, F)
+    L = mean_value_laplacian(V, F)
     from igl_heatseg.mesh.topology import boundary_loops
 
     bnd = boundary_loops(F)[0]

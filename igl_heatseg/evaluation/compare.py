@@ -4,10 +4,10 @@
 (:func:`igl_heatseg.parameterization.cut.cut_to_disk`) and maps each chart with every method in ``--methods``
 (default: Hessian HLLE, Hessian curved, libigl harmonic, libigl LSCM), without fallbacks, all
 through the same bijectivity certificate and distortion code
-(:func:`igl_heatseg.parameterization.param.compare_methods`).  It prints one table: chart, faces, method,
+(:func:`igl_heatseg.parameterization.methods.compare_methods`).  It prints one table: chart, faces, method,
 bijective, flips, overlaps, distortions, seconds, and a per-method summary.  The pseudo-methods
 ``param-hlle``, ``param-curved`` and ``param-auto`` run the full chart parameterization
-(:func:`igl_heatseg.parameterization.param.parameterize_chart`: Hessian map, local repair, certified fallbacks)
+(:func:`igl_heatseg.parameterization.chart.parameterize_chart`: Hessian map, local repair, certified fallbacks)
 and report the map each chart got and the share of charts that needed a fallback.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..mesh.checks import CleanMesh
-from ..parameterization.param import METHODS, PIPELINE_METHODS, compare_methods
+from ..parameterization.methods import METHODS, PIPELINE_METHODS, compare_methods
 from ..segmentation import segment_with_mode
 
 __all__ = ["chart_disks", "compare_param", "format_table", "DEFAULT_METHODS"]
@@ -111,8 +111,8 @@ def compare_param(
     theta, eps : float, optional
         Segmentation parameters (paper defaults when ``None``).
     methods : sequence of str
-        Names from :data:`igl_heatseg.parameterization.param.METHODS` (one map, no fallback) or
-        :data:`igl_heatseg.parameterization.param.PIPELINE_METHODS` (``param-hlle`` ...: the full chart
+        Names from :data:`igl_heatseg.parameterization.methods.METHODS` (one map, no fallback) or
+        :data:`igl_heatseg.parameterization.methods.PIPELINE_METHODS` (``param-hlle`` ...: the full chart
         parameterization with repair and fallbacks; the row's ``result`` says which map).
     min_faces : int
         Skip charts with fewer faces.
@@ -122,7 +122,7 @@ def compare_param(
     Returns
     -------
     rows : list of dict
-        One per (chart, method), see :func:`igl_heatseg.parameterization.param.compare_methods`.
+        One per (chart, method), see :func:`igl_heatseg.parameterization.methods.compare_methods`.
 
     Raises
     ------

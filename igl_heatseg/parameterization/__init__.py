@@ -8,8 +8,8 @@ Imports only from ``mesh`` and below.
 
 from .atlas import PackedAtlas, atlas_corner_uv, pack_charts
 from .bijectivity import Certificate, certify_map
+from .chart import ChartParam, parameterize_chart
 from .cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
-from .param import ChartParam, parameterize_chart
 
 __all__ = [
     "cut_to_disk",

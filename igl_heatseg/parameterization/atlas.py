@@ -1,7 +1,7 @@
 """Pack chart UV maps into one texture atlas in the unit square, and write OBJ files with UVs.
 
-Every chart map is assumed bijective already (see :mod:`igl_heatseg.parameterization.bijectivity`); packing only
-moves charts rigidly (rotation + translation) and scales all of them by one common factor, so
+Every chart map is assumed bijective already (see :mod:`~.bijectivity`); packing only moves
+charts rigidly (rotation + translation) and scales all of them by one common factor, so
 each chart keeps its orientation and its map stays bijective, and charts do not overlap each
 other because their (gutter-padded) bounding boxes do not.
 
@@ -29,6 +29,7 @@ __all__ = [
     "PackedAtlas",
     "pack_charts",
     "min_area_rotation",
+    "convex_hull",
     "boxes_overlap",
     "atlas_corner_uv",
     "GUTTER_DEFAULT",
@@ -91,8 +92,8 @@ def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
     return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
 
 
-#: Directions of the Akl-Toussaint filter in :func:`_hull` (points strictly inside the polygon
-#: of the extreme points in these directions cannot be hull vertices).
+#: Directions of the Akl-Toussaint filter in :func:`convex_hull` (points strictly inside the
+#: polygon of the extreme points in these directions cannot be hull vertices).
 _HULL_DIRECTIONS = 32
 
 
@@ -123,8 +124,14 @@ def _hull_candidates(P: np.ndarray) -> np.ndarray:
     return P[~inside]
 
 
-def _hull(P: np.ndarray) -> np.ndarray:
-    """Convex hull (Andrew's monotone chain), counter-clockwise, no repeated point."""
+def convex_hull(P: np.ndarray) -> np.ndarray:
+    """Convex hull (Andrew's monotone chain), counter-clockwise, no repeated point.
+
+    Examples
+    --------
+    >>> convex_hull([[0, 0], [2, 0], [1, 1], [2, 2], [0, 2], [1, 0]]).tolist()
+    [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]
+    """
     P = np.unique(_hull_candidates(np.asarray(P, dtype=np.float64)), axis=0)
     if len(P) < 3:
         return P
@@ -168,7 +175,7 @@ def min_area_rotation(UV: ArrayLike) -> float:
     45.0
     """
     P = np.asarray(UV, dtype=np.float64)
-    H = _hull(P)
+    H = convex_hull(P)
     if len(H) < 3:
         angles = np.array([0.0])
     else:
@@ -319,6 +326,8 @@ def pack_charts(
     >>> round(float(np.ptp(atlas.uvs[1][:, 0]) / np.ptp(atlas.uvs[0][:, 0])), 9)
     2.0
     """
+    # One long function on purpose: input checks, per-chart scaling and rotation, the two
+    # packers and the normalisation share the box arrays; split, they would pass ~8 arrays.
     if len(uvs) != len(faces):
         raise MeshError(f"pack_charts: {len(uvs)} UV arrays but {len(faces)} face arrays")
     if len(uvs) == 0:
@@ -436,6 +445,11 @@ def boxes_overlap(boxes: ArrayLike, gap: float = 0.0) -> np.ndarray:
     -------
     pairs : (p, 2) int64
         ``i < j`` for each overlapping pair.
+
+    Examples
+    --------
+    >>> boxes_overlap([[0, 0, 1, 1], [0.5, 0.5, 2, 2], [3, 3, 4, 4]]).tolist()
+    [[0, 1]]
     """
     B = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
     sep_x = (B[:, None, 0] >= B[None, :, 2] + gap) | (B[None, :, 0] >= B[:, None, 2] + gap)
@@ -469,6 +483,14 @@ def atlas_corner_uv(m: int, chart_faces: list, chart_F: list, uvs: list) -> np.n
     ------
     MeshError
         A face not covered by any chart, or covered twice.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tri = np.array([[0, 1, 2]])
+    >>> uv = atlas_corner_uv(2, [[1], [0]], [tri, tri], [np.eye(3)[:, :2], np.zeros((3, 2))])
+    >>> uv[1].tolist()
+    [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
     """
     out = np.full((m, 3, 2), np.nan)
     count = np.zeros(m, dtype=np.int64)

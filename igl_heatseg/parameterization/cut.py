@@ -39,9 +39,10 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
-from ..mesh.checks import as_mesh_arrays
 from ..errors import CutError, MeshError
-from ..mesh.topology import EdgeTopology, corner_edges, corner_fans, edge_topology, face_components
+from ..mesh.checks import as_mesh_arrays
+from ..mesh.topology import EdgeTopology, corner_edges, edge_topology, face_components
+from .wedges import open_wedges, split_topology
 
 __all__ = [
     "ChartTopology",
@@ -51,6 +52,8 @@ __all__ = [
     "cut_to_disk",
     "cut_along_path",
     "cut_along_paths",
+    "open_wedges",
+    "split_topology",
     "cut_mesh_along_edges",
 ]
 
@@ -190,44 +193,6 @@ def _check_chart(
 # opening a mesh along edges
 
 
-def _open(F: np.ndarray, topo: EdgeTopology, cut: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Split vertices into wedges joined across interior edges that are not cut.
-
-    Parameters
-    ----------
-    F : (m, 3) int64
-    topo : EdgeTopology of F
-    cut : (ne,) bool
-        Edges to cut (boundary entries are ignored).
-
-    Returns
-    -------
-    Fn : (m, 3) int64
-        Faces on the wedge vertices.
-    vertex_map : (n',) int64
-        Wedge vertex -> vertex of ``F``.  The first wedge of each referenced vertex gets the
-        rank of that vertex among the referenced ones (so an uncut, unpinched, compact mesh
-        comes back unchanged); extra wedges are appended.
-    """
-    m = F.shape[0]
-    ncomp, comp = corner_fans(F, topo, joined=~cut)
-    corner_vertex = F.T.ravel()  # node j*m + f -> F[f, j]
-    comp_vertex = np.empty(ncomp, dtype=np.int64)
-    comp_vertex[comp] = corner_vertex
-    order = np.lexsort((np.arange(ncomp), comp_vertex))
-    sv = comp_vertex[order]
-    first = np.ones(ncomp, dtype=bool)
-    first[1:] = sv[1:] != sv[:-1]
-    nprim = int(first.sum())
-    new_id = np.empty(ncomp, dtype=np.int64)
-    new_id[order[first]] = np.arange(nprim)
-    new_id[order[~first]] = nprim + np.arange(ncomp - nprim)
-    vertex_map = np.empty(ncomp, dtype=np.int64)
-    vertex_map[new_id] = comp_vertex
-    Fn = new_id[comp].reshape(3, m).T
-    return np.ascontiguousarray(Fn), vertex_map
-
-
 def _edge_ids(topo: EdgeTopology, n: int, pairs: np.ndarray) -> np.ndarray:
     """Unique-edge ids of vertex pairs; ``-1`` for pairs that are not edges."""
     pairs = np.sort(np.asarray(pairs, dtype=np.int64).reshape(-1, 2), axis=1)
@@ -240,7 +205,7 @@ def _edge_ids(topo: EdgeTopology, n: int, pairs: np.ndarray) -> np.ndarray:
 
 
 def _relabel_topology(topo: EdgeTopology, Fu: np.ndarray) -> EdgeTopology:
-    """Edge topology of ``Fu = _open(F, topo, no cuts)`` from that of ``F``, without a sort.
+    """Edge topology of ``Fu = open_wedges(F, topo, no cuts)`` from that of ``F``, without a sort.
 
     Splitting pinched vertices splits no edge: the two faces of an interior edge share their
     wedges at both ends.  So edge ids, ``EMAP``, counts and ``EF`` carry over and only the
@@ -267,39 +232,6 @@ def _path_mask(topo: EdgeTopology, n: int, paths: list) -> np.ndarray:
     return cut
 
 
-def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
-    """Edge topology of ``Fn = _open(F, topo, cut)`` from that of ``F``, without a sort.
-
-    An interior edge of ``F`` whose two faces reach it through different wedge pairs in
-    ``Fn`` (it was opened) becomes two boundary edges: the first face keeps the edge id, the
-    second face's copy gets a new id after the old ones.  Every other edge carries over.  Same
-    edges as :func:`igl_heatseg.mesh.topology.edge_topology` of ``Fn`` up to edge numbering (``E`` is
-    not sorted by row; :func:`_edge_ids` does not need it).
-    """
-    m = Fn.shape[0]
-    ne = len(topo.E)
-    D = np.sort(corner_edges(Fn), axis=1)
-    ncorner = len(topo.EMAP)
-    first = np.empty(ne, dtype=np.int64)
-    first[topo.EMAP[::-1]] = np.arange(ncorner)[::-1]
-    last = np.empty(ne, dtype=np.int64)
-    last[topo.EMAP] = np.arange(ncorner)
-    inner = topo.edge_face_count == 2
-    split = inner & (D[first] != D[last]).any(axis=1)
-    s_ids = np.flatnonzero(split)
-    new_ids = ne + np.arange(len(s_ids))
-    EMAP = topo.EMAP.copy()
-    EMAP[last[s_ids]] = new_ids
-    E = np.concatenate([D[first], D[last[s_ids]]])
-    counts = np.concatenate([topo.edge_face_count, np.ones(len(s_ids), dtype=np.int64)])
-    counts[s_ids] = 1
-    EF = np.concatenate([topo.EF, np.full((len(s_ids), 2), -1, dtype=np.int64)])
-    EF[s_ids, 1] = -1
-    EF[new_ids, 0] = last[s_ids] % m  # corner-edge c = j*m + f
-    EF[s_ids, 0] = first[s_ids] % m
-    return EdgeTopology(E=E, EMAP=EMAP, edge_face_count=counts, EF=EF)
-
-
 # --------------------------------------------------------------------------------------------
 # topology
 
@@ -307,12 +239,12 @@ def _split_topology(topo: EdgeTopology, Fn: np.ndarray) -> EdgeTopology:
 def _topology(
     F: np.ndarray, topo: EdgeTopology, unpinched: tuple[np.ndarray, np.ndarray] | None = None
 ) -> ChartTopology:
-    """Topology of ``F``; ``unpinched`` = ``_open(F, topo, no cuts)`` if already known."""
+    """Topology of ``F``; ``unpinched`` = ``open_wedges(F, topo, no cuts)`` if already known."""
     ncomp, _ = face_components(F, topo)
     nv = len(np.unique(F))
     chi = int(nv - len(topo.E) + F.shape[0])
     if unpinched is None:
-        unpinched = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
+        unpinched = open_wedges(F, topo, np.zeros(len(topo.E), dtype=bool))
     Fu, vmap = unpinched
     pinched = int(len(vmap) - nv)
     # Boundary loops after unpinching: components of the boundary-edge graph.  Edges keep
@@ -398,7 +330,7 @@ def _finish(
 ) -> CutResult:
     """Open ``(V, F)`` along ``cut`` and package the result (ids mapped through ``base_map``)."""
     cut = cut & topo.interior
-    Fn, vmap = _open(F, topo, cut)
+    Fn, vmap = open_wedges(F, topo, cut)
     Vn = np.ascontiguousarray(V[vmap])
     E = topo.E[cut]
     length = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).sum()) if len(E) else 0.0
@@ -407,7 +339,7 @@ def _finish(
         E = np.sort(base_map[E], axis=1)
         paths = [base_map[p] for p in (paths or [])]
     # Fn is made of wedges: already unpinched, all of its vertices used.
-    after = _topology(Fn, _split_topology(topo, Fn), (Fn, np.arange(len(vmap))))
+    after = _topology(Fn, split_topology(topo, Fn), (Fn, np.arange(len(vmap))))
     return CutResult(
         V=Vn,
         F=Fn,
@@ -452,6 +384,14 @@ def cut_mesh_along_edges(
     ------
     MeshError
         Bad mesh, or a pair that is not an edge of ``F``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [0, 2, 3]]); V = np.eye(4, 3)
+    >>> res = cut_mesh_along_edges(V, F, [[0, 2]])
+    >>> len(res.V), res.cut_edges.tolist()
+    (6, [[0, 2]])
     """
     V, F, topo = _check_chart(V, F, name)
     pairs = np.asarray(cut_edges, dtype=np.int64).reshape(-1, 2)
@@ -615,7 +555,7 @@ def cut_to_disk(V: ArrayLike, F: ArrayLike, name: str = "chart") -> CutResult:
     """
     V, F, topo = _check_chart(V, F, name)
     none = np.zeros(len(topo.E), dtype=bool)
-    Fu, umap = _open(F, topo, none)  # pinched vertices split
+    Fu, umap = open_wedges(F, topo, none)  # pinched vertices split
     before = _topology(F, topo, (Fu, umap))
     if before.components != 1:
         raise MeshError(
@@ -720,7 +660,7 @@ def cut_along_paths(
     for v0, v1 in pairs:
         if int(v0) == int(v1):
             raise MeshError(f"{name}: cut path ({v0}, {v1}) starts and ends at the same vertex")
-    Fu, umap = _open(F, topo, np.zeros(len(topo.E), dtype=bool))
+    Fu, umap = open_wedges(F, topo, np.zeros(len(topo.E), dtype=bool))
     before = _topology(F, topo, (Fu, umap))
     Vu = np.ascontiguousarray(V[umap])
     topo_u = _relabel_topology(topo, Fu)

@@ -523,3 +523,27 @@ def test_random_input_never_raises_or_gives_nan(seed, p, spread, flat):
         s = fit(P, N, w)
         assert _finite(s) and (s is None or math.isfinite(s.max_dev)), fit.__name__
     assert fit_surface(P, N, w, tol=1e-3 * spread).kind in SURFACE_KINDS
+
+
+def test_analytic_jacobians_match_central_differences():
+    """The Levenberg-Marquardt Jacobians of every kind, at generic parameters."""
+    from igl_heatseg.surfaces import fit as F
+
+    rng = np.random.default_rng(0)
+    X, sw = rng.normal(size=(40, 3)), rng.uniform(0.5, 1.0, 40)
+    a0 = F._unit(rng.normal(size=3))
+    n0 = F._orth(a0)
+    cases = [
+        (F._sphere_res(a0), [0.1, -0.2, 0.3, 0.4]),
+        (F._cylinder_res(a0, n0)[0], [0.1, -0.2, 0.3, 0.5, 0.4]),
+        (F._cylinder_res(a0, n0)[0], [0.05, 0.1, -0.3, 0.2, 1e-9]),  # nearly a plane
+        (F._cone_res(a0), [0.1, -0.2, 0.3, 0.2, 1.5, 0.4]),
+        (F._torus_res(a0), [0.1, -0.2, 0.3, 0.2, 0.1, 3.0, 1.0]),
+    ]
+    for make_res, t in cases:
+        res, t = make_res(X, sw), np.array(t)
+        r, J = res(t, True)
+        assert np.array_equal(r, res(t))
+        e = 1e-6
+        Jfd = np.stack([(res(t + e * u) - res(t - e * u)) / (2 * e) for u in np.eye(len(t))], 1)
+        assert np.abs(J - Jfd).max() < 1e-7 * np.abs(Jfd).max()

@@ -465,6 +465,19 @@ def fit_sphere(P, N=None, w=None, *, give_up_rms: float | None = None) -> Surfac
     if c is not None and not math.isfinite(r):
         r = float(ws @ _rownorm(Xs - c))
     n0, rho0, k0 = _curvature_seed(c, r, _pca_normal(Xs, ws))
+    sol = _run_lm(_sphere_res(n0), X, wn, [0.0, 0.0, rho0, k0], give_up)
+    if sol is None or abs(sol[0][3]) * FAR_RATIO <= 1.0:
+        return None
+    t = sol[0]
+    n = _chart(n0, *_frame(n0), t[0], t[1])
+    center = m + sc * (t[2] * n - n / t[3])
+    params = {"center": center, "radius": float(sc / abs(t[3]))}
+    return _finish("sphere", params, P, N, wn, _area(w))
+
+
+def _sphere_res(n0):
+    """Residual factory of the sphere in curvature form, parameters ``[s, t, rho, kappa]``:
+    normal ``n = chart(n0; s, t)``, surface point ``rho n``, signed curvature ``kappa``."""
     u0, v0 = _frame(n0)
 
     def make_res(Xa, sw):
@@ -479,14 +492,7 @@ def fit_sphere(P, N=None, w=None, *, give_up_rms: float | None = None) -> Surfac
             return sw * D, J * sw[:, None]
         return res
 
-    sol = _run_lm(make_res, X, wn, [0.0, 0.0, rho0, k0], give_up)
-    if sol is None or abs(sol[0][3]) * FAR_RATIO <= 1.0:
-        return None
-    t = sol[0]
-    n = _chart(n0, u0, v0, t[0], t[1])
-    center = m + sc * (t[2] * n - n / t[3])
-    params = {"center": center, "radius": float(sc / abs(t[3]))}
-    return _finish("sphere", params, P, N, wn, _area(w))
+    return make_res
 
 
 def _cross_section_seed(X, N, wn, a):
@@ -554,7 +560,22 @@ def fit_cylinder(P, N, w=None, *, give_up_rms: float | None = None) -> Surface |
     pn = _perp(_pca_normal(Xs, ws)[None], a0)[0]  # along a0 for a closed cylinder
     fallback = pn / np.linalg.norm(pn) if np.linalg.norm(pn) > 1e-6 else u0
     n0, rho0, k0 = _curvature_seed(c, r, fallback)
-    n0 = _unit(n0 - (n0 @ a0) * a0)
+    make_res, geometry = _cylinder_res(a0, _unit(n0 - (n0 @ a0) * a0))
+    sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0], give_up)
+    if sol is None or abs(sol[0][4]) * FAR_RATIO <= 1.0:
+        return None
+    t = sol[0]
+    a, _, _, n, _ = geometry(t)
+    foot = _perp((t[3] - 1.0 / t[4]) * n[None], a)[0]
+    params = {"point": m + sc * foot, "axis": a, "radius": float(sc / abs(t[4]))}
+    return _finish("cylinder", params, P, N, wn, _area(w))
+
+
+def _cylinder_res(a0, n0):
+    """Residual factory of the cylinder in curvature form (and its geometry), parameters
+    ``[s, t, phi, rho, kappa]``: axis ``a = chart(a0; s, t)``, cross-section normal ``n`` (``n0``
+    turned by ``phi`` about ``a0``, made normal to ``a``), point ``rho n``, curvature ``kappa``."""
+    u0, v0 = _frame(a0)
     b0 = _orth(a0, n0)
 
     def geometry(t):
@@ -584,14 +605,7 @@ def fit_cylinder(P, N, w=None, *, give_up_rms: float | None = None) -> Surface |
             return sw * D, J * sw[:, None]
         return res
 
-    sol = _run_lm(make_res, X, wn, [0.0, 0.0, 0.0, rho0, k0], give_up)
-    if sol is None or abs(sol[0][4]) * FAR_RATIO <= 1.0:
-        return None
-    t = sol[0]
-    a, _, _, n, _ = geometry(t)
-    foot = _perp((t[3] - 1.0 / t[4]) * n[None], a)[0]
-    params = {"point": m + sc * foot, "axis": a, "radius": float(sc / abs(t[4]))}
-    return _finish("cylinder", params, P, N, wn, _area(w))
+    return make_res, geometry
 
 
 def _perp(X, a):

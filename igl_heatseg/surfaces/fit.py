@@ -1111,12 +1111,13 @@ def face_samples(V, F, faces):
     Fs = F[_check_faces(faces, len(F))]
     if len(Fs) == 0:
         return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
-    dbl = igl.doublearea(V, Fs)
-    FN = igl.per_face_normals(V, Fs, np.zeros(3))
-    verts = np.unique(Fs)
-    VN = igl.per_vertex_normals(V, Fs, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)[verts]
-    wv = np.bincount(Fs.ravel(), weights=np.repeat(dbl / 12.0, 3), minlength=len(V))[verts]
-    P = np.r_[V[verts], V[Fs].mean(axis=1)]
+    verts, inv = np.unique(Fs, return_inverse=True)  # the segment as a small mesh
+    Vl, Fl = V[verts], inv.reshape(-1, 3).astype(np.int64)
+    dbl = igl.doublearea(Vl, Fl)
+    FN = igl.per_face_normals(Vl, Fl, np.zeros(3))
+    VN = igl.per_vertex_normals(Vl, Fl, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    wv = np.bincount(Fl.ravel(), weights=np.repeat(dbl / 12.0, 3), minlength=len(verts))
+    P = np.r_[Vl, Vl[Fl].mean(axis=1)]
     N = np.r_[VN, FN]
     w = np.r_[wv, dbl / 4.0]
     bad = ~np.all(np.isfinite(N), axis=1) | (np.abs(np.linalg.norm(N, axis=1) - 1) > 1e-6)

@@ -71,7 +71,11 @@ def test_labels_follow_input_order_with_unreferenced_and_duplicate_vertices(tmp_
         (b"", "e.obj", "empty file"),
         (b"OFF\n99999999 1 0\n0 0 0\n", "h.off", "declares 99999999 vertices"),
         (b"\x00\x01garbage" * 5, "g.ply", "not a PLY file"),
-        (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "r.obj", "outside 0..2"),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+            "r.obj",
+            "line 4: face vertex index 7 refers to no vertex",
+        ),
         (b"v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n", "i.obj", "NaN or infinite"),
         (b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "z.obj", "zero area"),
         (
@@ -188,3 +192,93 @@ def test_unknown_mode_is_rejected():
 
     with pytest.raises(ValueError, match="mode must be one of"):
         segment_with_mode(validate_mesh(*cube(2)), "fancy")
+
+
+def _zero_area_cube(tmp_path):
+    from meshes import cube
+
+    V, F = cube(4)
+    V = V.copy()
+    for f in (3, 40, 77):  # collapse one edge of three faces: 6 zero-area faces
+        V[F[f, 1]] = V[F[f, 0]]
+    p = tmp_path / "zero.off"
+    p.write_text(
+        f"OFF\n{len(V)} {len(F)} 0\n"
+        + "".join(f"{float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in V)
+        + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
+    )
+    return p, len(F)
+
+
+def test_zero_area_faces_refused_with_the_option_then_repaired(tmp_path, capsys):
+    p, m = _zero_area_cube(tmp_path)
+    assert main(["segment", str(p), "-o", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "zero area" in err and "use --repair" in err
+    assert main(["segment", str(p), "-o", str(tmp_path / "a"), "--repair"]) == 0
+    err = capsys.readouterr().err
+    assert "repaired: 6 zero area faces" in err
+    rep = json.loads((tmp_path / "a" / "report.json").read_text())
+    assert rep["repairs"]["zero_area_faces"] == 6 and rep["repairs"]["dropped_faces_unlabelled"] == 0
+    labels = (tmp_path / "a" / "labels.txt").read_text().split()
+    assert len(labels) == m and "-1" not in labels
+
+
+def test_evaluate_pred_needs_no_geometric_checks(tmp_path, capsys):
+    p, m = _zero_area_cube(tmp_path)
+    labels = tmp_path / "labels.txt"
+    labels.write_text("".join(f"{i % 3}\n" for i in range(m)))
+    assert main(["evaluate", str(p), "--truth", str(labels), "--pred", str(labels), "--json"]) == 0
+    ev = json.loads(capsys.readouterr().out)
+    assert ev["purity"] == pytest.approx(1.0) and ev["n_faces"] == m
+    short = tmp_path / "short.txt"
+    short.write_text("0\n" * (m - 1))
+    assert main(["evaluate", str(p), "--truth", str(labels), "--pred", str(short)]) == 2
+    assert "labels" in capsys.readouterr().err
+
+
+def test_evaluate_pred_on_polygon_mesh_counts_input_faces(tmp_path, capsys):
+    p = tmp_path / "q.off"
+    p.write_text("OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0.5 0\n4 0 1 2 3\n3 1 4 2\n")
+    t = tmp_path / "t.txt"
+    t.write_text("0\n1\n")
+    assert main(["evaluate", str(p), "--truth", str(t), "--pred", str(t), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["purity"] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("where", ["file", "parent_file"])
+def test_output_path_that_cannot_be_a_folder_is_one_line(tmp_path, data_dir, capsys, where):
+    f = tmp_path / "taken"
+    f.write_text("x")
+    out = f if where == "file" else f / "sub"
+    rc = main(["segment", str(data_dir / "block.ply"), "-o", str(out), "--progress", "never"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "\n" not in err and str(out) in err, err
+    assert f.read_text() == "x"
+
+
+def test_unwritable_output_parent_is_one_line(tmp_path, data_dir, capsys):
+    import os
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if os.access(ro, os.W_OK):
+            pytest.skip("running as root: permissions are not enforced")
+        rc = main(["segment", str(data_dir / "block.ply"), "-o", str(ro / "out")])
+        err = capsys.readouterr().err.strip()
+        assert rc == 2 and "\n" not in err and "cannot write the output folder" in err, err
+    finally:
+        ro.chmod(0o700)
+
+
+def test_output_on_a_read_only_file_system_is_one_line(tmp_path, data_dir, capsys):
+    import os
+
+    if not os.path.isdir("/proc/self"):
+        pytest.skip("no /proc")
+    out = "/proc/self/igl_heatseg_out"  # /proc refuses new folders, even to root
+    rc = main(["segment", str(data_dir / "block.ply"), "-o", out, "--progress", "never"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "\n" not in err and "cannot write the output folder" in err, err

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import MeshError
 from ..evaluation.metrics import Evaluation, evaluate_labels, read_labels, read_truth
 from ..io import load_mesh
@@ -41,16 +43,25 @@ def run(args) -> int:
     """Score predicted labels (or a fresh segmentation) against the truth; print the table."""
     t0 = time.perf_counter()
     try:
-        mesh = load_mesh(args.mesh)
-        m = mesh.F.shape[0]
+        # Scoring given labels needs only the faces: no geometric checks (a mesh with
+        # zero-area faces is scored as it is); segmenting needs the full checks (or --repair).
+        scoring = args.pred is not None
+        mesh = load_mesh(
+            args.mesh, checks="indices" if scoring else "all", repair=args.repair and not scoring
+        )
+        m = mesh.n_input_faces
         truths = read_truth(args.truth, m)
-        if args.pred is not None:
+        # Labels are per input face; the scores are computed on the triangles, each taking
+        # the label of its input face (faces dropped by --repair are not scored).
+        fmap = np.arange(mesh.F.shape[0]) if mesh.face_map is None else mesh.face_map
+        if scoring:
             pred_path = Path(args.pred)
             if pred_path.is_dir():
                 pred_path = pred_path / "labels.txt"
-            pred = read_labels(pred_path, m)
+            pred = read_labels(pred_path, m)[fmap]
         else:
             pred = segment_with_mode(mesh, args.mode).labels
+        truths = [t[fmap] for t in truths]
         ev = evaluate_labels(mesh.V, mesh.F, pred, truths, weighting=args.weighting)
     except MeshError as exc:
         sys.stderr.write(f"igl-heatseg evaluate: error: {exc}\n")
@@ -103,6 +114,12 @@ def register(subparsers) -> None:
         choices=("area", "count"),
         default="area",
         help="face weights of purity, coverage, Rand index, Hamming, GCE/LCE (default area)",
+    )
+    p.add_argument(
+        "--repair",
+        action="store_true",
+        help="without --pred: repair the mesh before segmenting it (as `segment --repair`); "
+        "with --pred no repair is needed (only the face count is checked)",
     )
     p.add_argument("--json", action="store_true", help="print the scores as JSON")
     p.set_defaults(func=run)

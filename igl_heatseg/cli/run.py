@@ -8,9 +8,20 @@ import sys
 import time
 from pathlib import Path
 
-from ..io import atomic_dir, load_mesh, write_run
+from ..io import atomic_dir, write_run
 from ..pipeline import run_pipeline
-from .common import add_progress_argument, add_segment_arguments, add_solver_argument, progress_for
+from .common import (
+    add_progress_argument,
+    add_repair_argument,
+    add_segment_arguments,
+    add_solver_argument,
+    input_report,
+    load_input,
+    named,
+    progress_for,
+    repair_summary,
+    write_input_labels,
+)
 
 __all__ = ["register", "parse_cut_path"]
 
@@ -55,10 +66,12 @@ def run(args: argparse.Namespace) -> int:
     """Load, run the pipeline, write the files and pictures; one summary line on stderr."""
     t0 = time.perf_counter()
     progress = progress_for(args)
-    mesh = load_mesh(args.mesh)
+    mesh = load_input(args)
     t_load = time.perf_counter() - t0
     progress.sized(mesh.F.shape[0])
-    res = run_pipeline(
+    res = named(
+        mesh,
+        run_pipeline,
         mesh,
         theta=args.theta,
         eps=args.eps,
@@ -70,12 +83,14 @@ def run(args: argparse.Namespace) -> int:
         progress=progress,
     )
     extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
+    extra.update(input_report(mesh, res.segmentation.labels))
     with atomic_dir(args.out) as tmp:
         pictures = write_pictures(tmp, res) if args.pictures else None
         report = write_run(tmp, res, extra, t_start=t0, pictures=pictures)
+        write_input_labels(tmp, mesh, res.segmentation.labels)
     s = report["parameterization"]
     sys.stderr.write(
-        f"{Path(args.mesh).name}: {res.segmentation.num_segments} segments, "
+        f"{Path(args.mesh).name}{repair_summary(mesh)}: {res.segmentation.num_segments} segments, "
         f"{s['charts_total']} charts ({s['charts_cut']} cut), {s['charts_bijective']} bijective, "
         f"{s['charts_fallback']} via fallback, in {report['timings']['total']:.2f} s; "
         f"wrote {args.out}/\n"
@@ -110,6 +125,7 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
     add_segment_arguments(p)
     add_solver_argument(p)
+    add_repair_argument(p)
     p.add_argument(
         "--energy",
         choices=("auto", "hlle", "curved"),

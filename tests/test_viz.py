@@ -7,6 +7,7 @@ process; the EGL render tests run in subprocesses.
 from __future__ import annotations
 
 import argparse
+import copy
 import ctypes
 import dataclasses
 import json
@@ -21,7 +22,9 @@ import pytest
 
 from igl_heatseg import validate_mesh
 from igl_heatseg.errors import MeshError
+from igl_heatseg.segmentation import segment_robust
 from igl_heatseg.segmentation.paper import segment_mesh
+from igl_heatseg.surfaces import SURFACE_KINDS, Surface
 
 ps = pytest.importorskip("polyscope")
 viz = pytest.importorskip("igl_heatseg.viz")
@@ -82,6 +85,26 @@ def box_charts(box):
     mesh, _ = box
     res = run_pipeline(mesh, None)
     return res.segmentation, res.charts
+
+
+@pytest.fixture(scope="module")
+def box_robust(box):
+    mesh, _ = box
+    return segment_robust(mesh)
+
+
+def surfaces_of_every_kind():
+    """One Surface per kind, in SURFACE_KINDS order."""
+    o, z = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    params = {
+        "plane": {"point": o, "normal": z},
+        "cylinder": {"point": o, "axis": z, "radius": 1.0},
+        "cone": {"apex": o, "axis": z, "half_angle": 0.3},
+        "sphere": {"center": o, "radius": 1.0},
+        "torus": {"center": o, "axis": z, "major_radius": 2.0, "minor_radius": 0.5},
+        "freeform": {"centroid": o},
+    }
+    return [Surface(k, params[k]) for k in SURFACE_KINDS]
 
 
 @pytest.fixture(scope="module")
@@ -181,6 +204,36 @@ def test_corner_uv_matches_3d_area_and_layout_does_not_overlap(box, box_charts):
             assert not overlap, (i, j)
 
 
+def test_surface_type_palette_is_fixed_and_covers_every_kind():
+    pal = viz.SURFACE_TYPE_COLORS
+    assert list(pal) == [*SURFACE_KINDS, "other"]
+    rgb = np.array(list(pal.values()))
+    assert rgb.shape == (7, 3) and (rgb >= 0).all() and (rgb <= 1).all()
+    assert len({tuple(c) for c in rgb}) == 7
+    assert pal["plane"] == pytest.approx((0x56 / 255, 0xB4 / 255, 0xE9 / 255))  # Okabe-Ito
+
+
+def test_surface_types_from_surfaces_else_primitive_types(box, box_robust):
+    _, paper = box
+    expected = [t.lower() for t in box_robust.primitive_types]
+    assert len(expected) == 6 and set(expected) <= {"plane", "cylinder", "sphere", "other"}
+    assert viz.segment_surface_types(box_robust) == expected
+    with pytest.raises(ValueError, match="needs .* robust mode"):
+        viz.segment_surface_types(paper)
+    typed = copy.copy(box_robust)  # fitted surfaces win over robust mode's primitive types
+    typed.surfaces = surfaces_of_every_kind()
+    assert viz.segment_surface_types(typed) == list(SURFACE_KINDS)
+    typed.surfaces = [None, *typed.surfaces[1:]]
+    assert viz.segment_surface_types(typed)[0] == "other"
+    typed.surfaces = typed.surfaces[:5]
+    with pytest.raises(ValueError, match="5 surface types for 6 segments"):
+        viz.segment_surface_types(typed)
+    typed = copy.copy(box_robust)
+    typed.primitive_types = ["Plane"] * 5 + ["Blob"]
+    with pytest.raises(ValueError, match="unknown surface types"):
+        viz.segment_surface_types(typed)
+
+
 # ------------------------------------------------------------------------ mock scenes
 
 
@@ -197,6 +250,36 @@ def test_scene_stages_under_mock(mock_ps, box, stage, tmp_path):
         assert mock_ps.has_curve_network("segment boundaries")
     if stage == "temperature":
         assert 0 <= info["segment"] < seg.num_segments
+
+
+def test_types_stage_under_mock(mock_ps, box, box_robust):
+    mesh, paper = box
+    viz.init_polyscope("openGL_mock")
+    info = viz.build_scene(mesh.V, mesh.F, box_robust, "types")
+    assert info["stage"] == "types" and not info["planar"]
+    assert mock_ps.has_surface_mesh("mesh") and mock_ps.has_curve_network("segment boundaries")
+    typed = copy.copy(paper)
+    typed.surfaces = surfaces_of_every_kind()
+    viz.init_polyscope("openGL_mock")
+    assert viz.show_surface_types(mesh.V, mesh.F, typed) == list(SURFACE_KINDS)
+    viz.init_polyscope("openGL_mock")
+    with pytest.raises(ValueError, match="robust mode"):
+        viz.build_scene(mesh.V, mesh.F, paper, "types")
+    assert not mock_ps.has_surface_mesh("mesh")  # failed before drawing anything
+    # the viewer's other stages skip the types quietly in paper mode
+    viz.build_scene(mesh.V, mesh.F, paper, "final", all_quantities=True)
+    viz.build_scene(mesh.V, mesh.F, box_robust, "final", all_quantities=True)
+
+
+def test_types_stage_from_the_command_line_under_mock(mock_ps, monkeypatch):
+    monkeypatch.setenv(viz.BACKEND_ENV, "openGL_mock")
+    p = _parser()
+    args = p.parse_args(["view", str(DATA / "fandisk.off"), "--stage", "types", "--mode", "robust"])
+    assert args.func(args) == 0
+    assert mock_ps.has_surface_mesh("mesh")
+    args = p.parse_args(["view", str(DATA / "fandisk.off"), "--stage", "types"])
+    with pytest.raises(ValueError, match="robust mode"):
+        args.func(args)
 
 
 def test_temperature_segment_out_of_range(mock_ps, box):
@@ -375,6 +458,31 @@ def _render_box_run(tmp_path: Path, size, stages) -> None:
         """,
         tmp_path,
     )
+
+
+@needs_egl
+def test_headless_render_of_surface_types(tmp_path):
+    """fandisk in robust mode: planes sky blue, cylinders orange (hues survive the shading)."""
+    from matplotlib.colors import rgb_to_hsv
+
+    size = (400, 300)
+    _render_subprocess(
+        f"""
+        import json
+        from igl_heatseg.cli.viz import render_file
+        render_file({str(DATA / "fandisk.off")!r}, "types.png", "types", size={size},
+                    mode="robust")
+        print(json.dumps(0))
+        """,
+        tmp_path,
+    )
+    img = _check_picture(tmp_path / "types.png", size)
+    part = img[~np.all(img > 0.98, axis=2)]
+    hsv = rgb_to_hsv(part)
+    for kind, least in (("plane", 0.2), ("cylinder", 0.05)):
+        h = rgb_to_hsv(np.array(viz.SURFACE_TYPE_COLORS[kind]))[0]
+        near = (np.abs((hsv[:, 0] - h + 0.5) % 1.0 - 0.5) < 0.03) & (hsv[:, 1] > 0.3)
+        assert near.mean() > least, (kind, near.mean())
 
 
 @needs_egl

@@ -166,7 +166,8 @@ def register(subparsers) -> None:
                 "--stage",
                 choices=STAGES,
                 default="final",
-                help="what to show (default: final segmentation)",
+                help="what to show (default: final segmentation); 'types' colours every "
+                "segment by its fitted surface type (plane, cylinder, ...) and needs --mode robust",
             )
             p.add_argument(
                 "--segment",

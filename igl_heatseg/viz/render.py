@@ -8,6 +8,7 @@ Examples
 Headless, from the command line or Python::
 
     igl-heatseg render data/fandisk.off -o final.png --stage final --size 1200 900
+    igl-heatseg render data/fandisk.off -o types.png --stage types --mode robust
 
 >>> import igl_heatseg as ih                                          # doctest: +SKIP
 >>> mesh = ih.load_mesh("data/fandisk.off")                           # doctest: +SKIP

@@ -1,4 +1,4 @@
-"""polyscope scenes of every pipeline stage (paper Figs. 6, 11, 13–15).
+"""polyscope scenes of every pipeline stage (paper Figs. 6, 11, 13–15) and of the fitted types.
 
 The scenes are built from results (:func:`build_scene`) and shown interactively
 (``igl-heatseg view MESH --stage ...``) or rendered without a display
@@ -17,6 +17,10 @@ Stages (:data:`STAGES`):
     The initial over-segmentation, one categorical colour per initial group (Fig. 11).
 ``final``
     The final segmentation (Fig. 13), segment boundaries as thin dark curves.
+``types``
+    Every face in the colour of its segment's fitted surface type
+    (:data:`SURFACE_TYPE_COLORS`), segment boundaries as curves; needs typed segments
+    (:func:`segment_surface_types`: robust mode today).
 ``checker``
     Every chart's UV map as a checkerboard on the 3D mesh, cut paths as curves (Fig. 15).
 ``charts``
@@ -67,6 +71,7 @@ __all__ = [
     "BACKEND_ENV",
     "HEADLESS_BACKEND",
     "EGL_HINT",
+    "SURFACE_TYPE_COLORS",
     "Stage",
     "import_polyscope",
     "init_polyscope",
@@ -77,6 +82,8 @@ __all__ = [
     "show_seeds",
     "show_temperature",
     "show_labels",
+    "show_surface_types",
+    "segment_surface_types",
     "segment_boundary_edges",
     "show_checker",
     "show_chart_maps",
@@ -84,10 +91,10 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-Stage = Literal["seeds", "initial", "final", "temperature", "charts", "checker"]
+Stage = Literal["seeds", "initial", "final", "types", "temperature", "charts", "checker"]
 
 #: Stages understood by :func:`build_scene` and :func:`igl_heatseg.viz.render.render_scene`.
-STAGES: tuple[str, ...] = ("seeds", "initial", "final", "temperature", "charts", "checker")
+STAGES: tuple[str, ...] = ("seeds", "initial", "final", "types", "temperature", "charts", "checker")
 
 #: Stages that need the parameterization (charts).
 CHART_STAGES: tuple[str, ...] = ("charts", "checker")
@@ -115,6 +122,27 @@ SHARP_COLOR = (0.08, 0.08, 0.08)
 CUT_COLOR = (0.85, 0.05, 0.05)
 CHECKER_COLORS = ((0.97, 0.97, 0.97), (0.25, 0.25, 0.30))
 
+
+def _hex(code: str) -> tuple[float, float, float]:
+    return tuple(int(code[i : i + 2], 16) / 255.0 for i in (1, 3, 5))  # type: ignore[return-value]
+
+
+#: Colour of each fitted surface type (RGB in [0, 1]), for the ``types`` stage and its legend.
+#: The six kinds take six colours of the Okabe–Ito palette (Okabe & Ito 2008, "Color Universal
+#: Design"), which stay distinguishable under protanopia, deuteranopia and tritanopia; its black
+#: is left out (the boundary curves are dark) and so is its blue, which has the hue of the sky
+#: blue of planes and would differ from it only in lightness, which shading changes.
+#: ``"other"``, neutral grey, is a segment whose type is not known precisely: robust mode's
+#: ``"Other"`` (a cone, torus or freeform surface, not told apart) or a segment without a fit.
+SURFACE_TYPE_COLORS: dict[str, tuple[float, float, float]] = {
+    "plane": _hex("#56B4E9"),  # sky blue
+    "cylinder": _hex("#E69F00"),  # orange
+    "cone": _hex("#009E73"),  # bluish green
+    "sphere": _hex("#CC79A7"),  # reddish purple
+    "torus": _hex("#F0E442"),  # yellow
+    "freeform": _hex("#D55E00"),  # vermillion
+    "other": _hex("#999999"),  # grey
+}
 
 #: Curve radii, relative to polyscope's scene length scale (the bounding-box diagonal).
 SHARP_RADIUS: float = 0.0012
@@ -466,6 +494,84 @@ def show_labels(V, F, labels: ArrayLike, name: str, mesh_name: str = "mesh", ena
     return m
 
 
+def segment_surface_types(seg) -> list[str]:
+    """The fitted surface type of every final segment, as keys of :data:`SURFACE_TYPE_COLORS`.
+
+    Taken from ``seg.surfaces`` (a list of :class:`igl_heatseg.surfaces.Surface`, one per
+    segment, ``None`` for a segment without a fit) when the segmentation has it, else from
+    ``seg.primitive_types`` (robust mode: ``"Plane"``, ``"Cylinder"``, ``"Sphere"``,
+    ``"Other"``), lower-cased; ``None`` and ``"Other"`` become ``"other"``.
+
+    Parameters
+    ----------
+    seg : Segmentation
+
+    Returns
+    -------
+    list of str, length ``seg.num_segments``
+
+    Raises
+    ------
+    ValueError
+        The segmentation has no types (paper mode: segment with ``mode="robust"``), their
+        count is not the number of segments, or a type is unknown.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> segment_surface_types(NS(num_segments=2, primitive_types=["Plane", "Other"]))
+    ['plane', 'other']
+    """
+    surfaces = getattr(seg, "surfaces", None)
+    if surfaces is not None:
+        kinds = [None if s is None else s.kind for s in surfaces]
+    elif getattr(seg, "primitive_types", None):
+        kinds = list(seg.primitive_types)
+    else:
+        raise ValueError(
+            "stage 'types' needs the fitted surface type of every segment: segment in robust "
+            "mode (--mode robust, or mode='robust'), which types its segments"
+        )
+    out = ["other" if k is None else str(k).lower() for k in kinds]
+    if len(out) != seg.num_segments:
+        raise ValueError(f"{len(out)} surface types for {seg.num_segments} segments")
+    unknown = sorted(set(out) - set(SURFACE_TYPE_COLORS))
+    if unknown:
+        raise ValueError(f"unknown surface types {unknown}; known: {list(SURFACE_TYPE_COLORS)}")
+    return out
+
+
+def show_surface_types(V, F, seg, mesh_name: str = "mesh", enabled: bool = True) -> list[str]:
+    """Every face in the colour of its segment's fitted surface type (:data:`SURFACE_TYPE_COLORS`).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    seg : Segmentation
+        With types (see :func:`segment_surface_types`) and ``labels``.
+    mesh_name : str
+    enabled : bool
+
+    Returns
+    -------
+    list of str
+        The type of every segment (for a legend).
+
+    Raises
+    ------
+    ValueError
+        As :func:`segment_surface_types`.
+    """
+    kinds = segment_surface_types(seg)
+    pal = np.array([SURFACE_TYPE_COLORS[k] for k in kinds], dtype=np.float64).reshape(-1, 3)
+    C = pal[np.asarray(seg.labels, dtype=np.int64)]
+    _mesh(V, F, mesh_name).add_color_quantity(
+        "surface types", C, defined_on="faces", enabled=enabled
+    )
+    return kinds
+
+
 def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cuts: bool = True):
     """Every chart's UV as a checkerboard on the 3D mesh, cut paths as red curves (Fig. 15).
 
@@ -593,7 +699,8 @@ def build_scene(
     Raises
     ------
     ValueError
-        Unknown stage, or a chart stage without charts.
+        Unknown stage, a chart stage without charts, or ``"types"`` without surface types
+        (:func:`segment_surface_types`).
     """
     if stage not in STAGES:
         raise ValueError(f"stage must be one of {STAGES}, got {stage!r}")
@@ -601,6 +708,8 @@ def build_scene(
         raise ValueError(f"stage {stage!r} needs the charts of the parameterization")
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
+    if stage == "types":
+        segment_surface_types(seg)  # fail before registering anything
     if stage == "charts":
         show_chart_maps(V, charts)
         return {"mesh": None, "stage": stage, "planar": True, "direction": None, "segment": None}
@@ -631,5 +740,12 @@ def _add_stage_quantities(V, F, seg, stage: str, segment: int, all_quantities: b
         show_labels(V, F, seg.initial_labels, "initial segmentation", enabled=stage == "initial")
     if stage == "final" or all_quantities:
         show_labels(V, F, seg.labels, "final segmentation", enabled=stage == "final")
-    if stage == "final":
+    if stage == "types":
+        show_surface_types(V, F, seg)
+    elif all_quantities:
+        try:
+            show_surface_types(V, F, seg, enabled=False)
+        except ValueError:  # paper mode: no fitted types
+            log.debug("no surface types to show")
+    if stage in ("final", "types"):
         add_curves(V, segment_boundary_edges(F, seg.labels), "segment boundaries")

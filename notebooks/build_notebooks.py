@@ -127,12 +127,32 @@ NB1 = [
         'picture("fandisk", V, F, seg, "final");'
     ),
     new_markdown_cell(
-        "## 6. Charts: cut to disks, Hessian parameterization, certificate (Figs. 14, 15)\n\n"
+        "## 6. Surface types (robust mode)\n\n"
+        "Robust mode fits a plane, a cylinder or a sphere to every segment (`Other` when none "
+        "fits). The `types` stage colours each face by its segment's type, in the fixed, "
+        "colour-blind-safe palette `viz.SURFACE_TYPE_COLORS` (grey: other), segment boundaries "
+        "as curves."
+    ),
+    new_code_cell(
+        "rob = ih.segment_robust(mesh)\n"
+        "kinds = viz.segment_surface_types(rob)\n"
+        'print(f"{rob.num_segments} segments:", {k: kinds.count(k) for k in sorted(set(kinds))})\n'
+        'picture("fandisk", V, F, rob, "types")\n'
+        "fig, ax = plt.subplots(figsize=(7, 0.7))  # the legend\n"
+        "for i, (kind, rgb) in enumerate(viz.SURFACE_TYPE_COLORS.items()):\n"
+        "    ax.add_patch(plt.Rectangle((i, 0), 0.9, 1, color=rgb))\n"
+        '    ax.text(i + 0.45, -0.2, kind, ha="center", va="top", fontsize=9)\n'
+        "ax.set(xlim=(0, len(viz.SURFACE_TYPE_COLORS)), ylim=(-1.2, 1))\n"
+        "ax.set_axis_off()\n"
+        "plt.show()"
+    ),
+    new_markdown_cell(
+        "## 7. Charts: cut to disks, Hessian parameterization, certificate (Figs. 14, 15)\n\n"
         "`ih.run` cuts every chart that is not a topological disk and maps it to the "
         "plane; each map is certified (no flipped triangle, no boundary self-intersection)."
     ),
     new_code_cell(
-                "t = time.perf_counter()\n"
+        "t = time.perf_counter()\n"
         "res = ih.run(mesh)\n"
         'print(f"pipeline: {time.perf_counter() - t:.1f} s")\n'
         "print(f\"{'chart':>5} {'seg':>4} {'faces':>6} {'cut':>12} {'method':>14} \"\n"
@@ -148,8 +168,9 @@ NB1 = [
         "plt.show()"
     ),
     new_markdown_cell(
-        "Interactive use: `igl-heatseg view data/fandisk.off --stage final` opens polyscope's window "
-        "with every stage a click away (`igl-heatseg view data/fandisk.off --stage seeds`)."
+        "Interactive use: `igl-heatseg view data/fandisk.off --stage final` opens polyscope's "
+        "window with every stage a click away (`igl-heatseg view data/fandisk.off --stage seeds`; "
+        "`--stage types --mode robust` for the surface types)."
     ),
 ]
 
@@ -188,7 +209,7 @@ NB2 = [
         "fallback when needed)"
     ),
     new_code_cell(
-                "summary = []\n"
+        "summary = []\n"
         'for name in ["fandisk.off", "block.ply"]:\n'
         "    mesh = ih.load_mesh(DATA / name)\n"
         "    t = time.perf_counter()\n"
@@ -284,7 +305,7 @@ NB3 = [
         "construction). Below: segments, charts, bijective Hessian maps, fallbacks."
     ),
     new_code_cell(
-                'mesh = MESHES["block.ply"]\n'
+        'mesh = MESHES["block.ply"]\n'
         "res_rows = []\n"
         "for th in np.pi / np.array([30, 20, 10]):\n"
         "    s = ih.run(mesh, th, 0.05).report['parameterization']\n"

@@ -69,5 +69,5 @@ def test_notebook_runs(path, tmp_path, monkeypatch):
     assert not errors
     if path.name.startswith("01"):
         pngs = {p.name for p in tmp_path.glob("*.png")}
-        for stage in ("seeds", "temperature", "initial", "final", "checker", "charts"):
+        for stage in ("seeds", "temperature", "initial", "final", "types", "checker", "charts"):
             assert f"fandisk_{stage}.png" in pngs

@@ -408,6 +408,20 @@ def test_tolerance_accepts_a_coarse_cylinder_and_is_scale_invariant():
         assert fit_surface(*face_samples(Vk, F, np.arange(len(F))), tol=k * tol).kind == "cylinder"
 
 
+def test_tolerance_per_segment_chord_error():
+    """A coarse small hole (12 facets) beside a finely tessellated large cylinder: the mesh's
+    chord error is the fine one's; the hole's own tolerance covers its coarse facets."""
+    V1, F1 = cylinder_mesh(240, 8, radius=5.0, height=2.0)
+    V2, F2 = cylinder_mesh(12, 8, radius=1.0, height=2.0)
+    V, F = np.r_[V1, V2 + [20.0, 0, 0]], np.r_[F1, F2 + len(V1)]
+    hole = np.arange(len(F1), len(F))
+    chord = 1.0 - math.cos(math.pi / 12)
+    assert fit_tolerance(V, F) < 0.5 * chord
+    tol = fit_tolerance(V, F, noise=noise_level(V, F), faces=hole)
+    assert chord < tol < 1.2 * chord
+    assert fit_surface(*face_samples(V, F, hole), tol=tol).kind == "cylinder"
+
+
 def test_tolerance_covers_noise():
     V, F = torus_mesh(90, 36)
     h = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))

@@ -1226,14 +1226,19 @@ def _ring_quadric_ratios(V, A, val, n, h):
     return rss / dof / (chi2.median(dof) / dof)
 
 
-def _chord_error(V, F) -> float:
+def _chord_error(V, F, faces=None) -> float:
     """Chord (sagitta) error of the tessellation's curved facets: for each interior edge whose
     dihedral angle ``theta`` lies in [FLAT_ANGLE, CREASE_ANGLE], a circular arc through the two
     faces with their mean height ``c`` across the edge as chords has sagitta
-    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those."""
+    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those (edges between two of
+    ``faces`` only, when given)."""
     TT = igl.triangle_triangle_adjacency(F)[0]
     f, e = np.nonzero(TT > np.arange(len(F))[:, None])  # each interior edge once
     g = TT[f, e]
+    if faces is not None:
+        inside = np.zeros(len(F), bool)
+        inside[faces] = True
+        f, e, g = f[inside[f] & inside[g]], e[inside[f] & inside[g]], g[inside[f] & inside[g]]
     FN = igl.per_face_normals(V, F, np.zeros(3))
     theta = np.arccos(np.clip(np.einsum("ij,ij->i", FN[f], FN[g]), -1.0, 1.0))
     keep = (theta >= FLAT_ANGLE) & (theta <= CREASE_ANGLE)
@@ -1246,7 +1251,7 @@ def _chord_error(V, F) -> float:
     return float(np.quantile(0.5 * c * np.tan(theta / 4.0), CHORD_QUANTILE))
 
 
-def fit_tolerance(V, F, noise: float | None = None) -> float:
+def fit_tolerance(V, F, noise: float | None = None, faces=None) -> float:
     """Fit tolerance of a mesh, from its own noise, tessellation and size.
 
     ``tol = sqrt((K_NOISE * noise)^2 + (K_CHORD * chord)^2) + K_FLOOR * mean_edge``
@@ -1267,7 +1272,11 @@ def fit_tolerance(V, F, noise: float | None = None) -> float:
     F : (m, 3) array_like of int
         Triangles.
     noise : float, optional
-        Noise level if known (model units); estimated by :func:`noise_level` otherwise.
+        Noise level if known (model units); estimated by :func:`noise_level` otherwise (over
+        the whole mesh: pass it once computed when calling per segment).
+    faces : (k,) array_like of int, or (m,) bool, optional
+        One segment's faces: its own chord error instead of the whole mesh's (a coarse small
+        hole next to a finely tessellated large fillet).
 
     Returns
     -------
@@ -1287,6 +1296,6 @@ def fit_tolerance(V, F, noise: float | None = None) -> float:
         noise = noise_level(V, F)
     elif not (math.isfinite(noise) and noise >= 0):
         raise MeshError(f"noise must be a finite float >= 0, got {noise!r}")
-    chord = _chord_error(V, F)
+    chord = _chord_error(V, F, None if faces is None else _check_faces(faces, len(F)))
     h = igl.avg_edge_length(V, F)
     return float(math.hypot(K_NOISE * noise, K_CHORD * chord) + K_FLOOR * h)

@@ -65,8 +65,8 @@ FACET_GAP_FACTOR = 1.5
 
 #: A face of revolution is built on a (u, v) rectangle when its loop edges stay within this
 #: fraction of the sewing tolerance of their mean-v circle: those circles then replace the
-#: loop edges, and sewing must close the gap.
-REVOLVED_SEW_FRACTION = 0.9
+#: loop edges, and sewing must close the gap (between two such neighbours, twice this).
+REVOLVED_SEW_FRACTION = 0.45
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -222,8 +222,8 @@ def _seam_polyline(chain, V, projs, ctx):
     return None
 
 
-def _edge(chain, V, pos, projs, vertices, ctx, snap):
-    """The shared TopoDS_Edge of a chain (and snapped positions of its mesh vertices)."""
+def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
+    """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam)."""
     ps = [projs[s] for s in (chain.left, chain.right) if s >= 0 and projs[s] is not None]
     R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
     P, orig = _samples(V[chain.verts] if R is None else R)
@@ -239,11 +239,21 @@ def _edge(chain, V, pos, projs, vertices, ctx, snap):
         snap[chain.verts] = P[orig]
     else:
         P[-1] = P[0]
-        vid = int(chain.verts[0])
-        pos[vid] = P[0]
-        ctx["builder"].UpdateVertex(vertices[vid], geometry._pnt(P[0]), ctx["vertex_tol"])
-    curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
-    ctx["chain_points"].append(P)
+        _move_vertex(int(chain.verts[0]), P[0], pos, vertices, ctx)
+    return P
+
+
+def _move_vertex(vid, X, pos, vertices, ctx):
+    pos[vid] = np.asarray(X, dtype=np.float64)
+    ctx["builder"].UpdateVertex(vertices[vid], geometry._pnt(X), ctx["vertex_tol"])
+
+
+def _edge(chain, P, circle, pos, projs, vertices, ctx, snap):
+    """The shared TopoDS_Edge of a chain through its samples P (or the given exact circle)."""
+    if circle is None:
+        curve, t0, t1 = geometry.edge_curve(P, ctx["curve_tol"], ctx["diag"])
+    else:
+        curve, t0, t1 = circle
     if any(s >= 0 and projs[s] is None for s in (chain.left, chain.right)):
         Q = snap[chain.verts]  # a faceted neighbour's border: chords against this curve
         gap = geometry.curve_distance(curve, 0.5 * (Q[1:] + Q[:-1])).max(initial=0.0)
@@ -262,6 +272,66 @@ def _edge(chain, V, pos, projs, vertices, ctx, snap):
     return mk.Edge()
 
 
+def _circle_gap(curve, s, level, ctx) -> float:
+    """Largest distance from samples of a neighbour's circle to this face's iso-v circle."""
+    own, _ = periodic.iso_circle(s, level)
+    t = np.linspace(0, 2 * np.pi, 32, endpoint=False)
+    P = np.array([[q.X(), q.Y(), q.Z()] for q in (curve.Value(float(x)) for x in t)])
+    return float(geometry.curve_distance(own, P).max())
+
+
+def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
+    """Faces of revolution bounded by coaxial circles (:mod:`.periodic`): their plans, and for
+    each of their closed chains the exact iso-v circle that becomes the shared edge.
+
+    Faces are visited breadth-first over shared circles: a face whose circle was set by a
+    neighbour starts its seam at that circle's vertex (``plan['u0']``) and starts its other
+    circle there too, so that the vertices of its own boundary circles and of the shared
+    edges coincide (a circle cut next to its vertex leaves a sliver that sewing loses)."""
+    plans = {}
+    for a, s in enumerate(surfaces):
+        if projs[a] is not None and s.is_analytic and graph.loops[a]:
+            plan = periodic.revolved_plan(s, _loop_points(graph.loops[a], ctx), seg_points(a),
+                                          REVOLVED_SEW_FRACTION * ctx["sew_tol"])
+            if plan is not None:
+                plans[a] = plan
+    circles, done = {}, {}
+    for root in plans:
+        queue = [root]
+        while queue:
+            a = queue.pop(0)
+            if a in done:
+                continue
+            if not _plan_circles(a, surfaces[a], plans[a], graph, circles, pos, vertices, ctx):
+                continue
+            done[a] = plans[a]
+            for loop in graph.loops[a]:
+                ch = graph.chains[loop[0][0]]
+                queue.extend(b for b in (ch.left, ch.right) if b in plans and b not in done)
+    return done, circles
+
+
+def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx) -> bool:
+    """Set the seam start and the circles of one planned face (False: a neighbour's circle is
+    too far from this face's own, trim it instead)."""
+    tol = REVOLVED_SEW_FRACTION * ctx["sew_tol"]
+    cids = [lp[0][0] for lp in graph.loops[a]]
+    if any(c in circles and _circle_gap(circles[c][0], s, lv, ctx) > tol
+           for c, lv in zip(cids, plan["levels"])):
+        return False
+    given = [c for c in cids if c in circles]
+    plan["u0"] = 0.0
+    if given:
+        start = pos[int(graph.chains[given[0]].verts[0])]
+        plan["u0"] = float(periodic.surface_uv(s, start[None])[0][0])
+    for c, level in zip(cids, plan["levels"]):
+        if c not in circles:
+            curve, start = periodic.iso_circle(s, level, ctx["chain_points"][c], plan["u0"])
+            circles[c] = (curve, 0.0, 2 * np.pi)
+            _move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
+    return True
+
+
 def _loop_points(loops, ctx):
     """Per loop, the points of its one closed edge (walked like the loop), or None."""
     out = []
@@ -278,9 +348,8 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
     """Trimmed, fixed face of segment a, or (None, reason)."""
     builder = ctx["builder"]
     face = None
-    if loops and ctx["surfaces"][a].is_analytic:
-        face = periodic.revolved_face(ctx["surfaces"][a], geom, _loop_points(loops, ctx),
-                                      seg_points, REVOLVED_SEW_FRACTION * ctx["sew_tol"])
+    if a in ctx["revolved"]:
+        face = periodic.revolved_face(geom, ctx["revolved"][a])
     if face is not None:
         pass
     elif not loops:
@@ -414,7 +483,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
     ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
-    ctx["chain_points"] = []
     closed = _is_closed(F)
     timings: dict = {}
     try:
@@ -464,10 +532,16 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
     snap = V.copy()
     for v, X in pos.items():
         snap[v] = X
+    ctx["chain_points"] = [_edge_points(ch, V, pos, projs, vertices, ctx, snap)
+                           for ch in graph.chains]
+    plans, circles = _revolved_plans(graph, surfaces, projs,
+                                     lambda a: V[np.unique(F[seg_faces[a]])], pos, vertices, ctx)
+    ctx["revolved"] = plans
     edges = []
     for i, ch in enumerate(graph.chains):
         progress("edges", i / max(len(graph.chains), 1))
-        edges.append(_edge(ch, V, pos, projs, vertices, ctx, snap))
+        edges.append(_edge(ch, ctx["chain_points"][i], circles.get(i), pos, projs, vertices,
+                           ctx, snap))
     timings["edges"] = time.perf_counter() - t
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()

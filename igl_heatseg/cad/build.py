@@ -281,20 +281,24 @@ def _circle_gap(curve, s, level, ctx) -> float:
 
 
 def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
-    """Faces of revolution bounded by coaxial circles (:mod:`.periodic`): their plans, and for
-    each of their closed chains the exact iso-v circle that becomes the shared edge.
+    """Faces of revolution bounded by closed edges around their axis (:mod:`.periodic`).
 
-    Faces are visited breadth-first over shared circles: a face whose circle was set by a
-    neighbour starts its seam at that circle's vertex (``plan['u0']``) and starts its other
-    circle there too, so that the vertices of its own boundary circles and of the shared
-    edges coincide (a circle cut next to its vertex leaves a sliver that sewing loses)."""
-    plans = {}
+    Returns the faces built on a (u, v) rectangle (``plans``: their loops are circles at
+    constant v, which become the shared edges), the other such faces with the seam angle
+    ShapeFix_Face should use (``wraps``), and the exact circles by chain. Faces are visited
+    breadth-first over shared closed edges: a face whose edge was started by a neighbour
+    puts its seam through that edge's vertex and restarts its other closed edges there, so
+    every closed edge's vertex lies on the seams of its faces (a closed edge cut next to its
+    vertex leaves a sliver edge that sewing loses)."""
+    plans, wraps = {}, {}
     for a, s in enumerate(surfaces):
-        if projs[a] is not None and s.is_analytic and graph.loops[a]:
-            plan = periodic.revolved_plan(s, _loop_points(graph.loops[a], ctx), seg_points(a),
+        if projs[a] is None or s.kind not in periodic.REVOLVED_KINDS or not graph.loops[a]:
+            continue
+        lp = _loop_points(graph.loops[a], ctx)
+        if not periodic.wraps_axis(s, lp):
+            continue
+        plans[a] = periodic.revolved_plan(s, lp, seg_points(a),
                                           REVOLVED_SEW_FRACTION * ctx["sew_tol"])
-            if plan is not None:
-                plans[a] = plan
     circles, done = {}, {}
     for root in plans:
         queue = [root]
@@ -302,34 +306,49 @@ def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
             a = queue.pop(0)
             if a in done:
                 continue
-            if not _plan_circles(a, surfaces[a], plans[a], graph, circles, pos, vertices, ctx):
-                continue
-            done[a] = plans[a]
+            done[a] = _plan_circles(a, surfaces[a], plans[a], graph, circles, pos, vertices,
+                                    ctx)
             for loop in graph.loops[a]:
                 ch = graph.chains[loop[0][0]]
                 queue.extend(b for b in (ch.left, ch.right) if b in plans and b not in done)
-    return done, circles
+    plans = {a: p for a, p in plans.items() if p is not None and done[a] is not None}
+    wraps = {a: u0 for a, u0 in done.items() if a not in plans and u0 is not None}
+    return plans, wraps, circles
 
 
-def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx) -> bool:
-    """Set the seam start and the circles of one planned face (False: a neighbour's circle is
-    too far from this face's own, trim it instead)."""
+def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
+    """Seam start u0 of one face around its axis, starting its closed edges there (exact
+    circles when planned); None when a neighbour's circle is too far from this face's own
+    (then the face is trimmed by ShapeFix_Face with its seam away from the vertices)."""
     tol = REVOLVED_SEW_FRACTION * ctx["sew_tol"]
     cids = [lp[0][0] for lp in graph.loops[a]]
-    if any(c in circles and _circle_gap(circles[c][0], s, lv, ctx) > tol
-           for c, lv in zip(cids, plan["levels"])):
-        return False
+    if plan is not None and any(circles.get(c) is not None and
+                                _circle_gap(circles[c][0], s, lv, ctx) > tol
+                                for c, lv in zip(cids, plan["levels"])):
+        plan = None
     given = [c for c in cids if c in circles]
-    plan["u0"] = 0.0
+    u0 = 0.0
     if given:
-        start = pos[int(graph.chains[given[0]].verts[0])]
-        plan["u0"] = float(periodic.surface_uv(s, start[None])[0][0])
-    for c, level in zip(cids, plan["levels"]):
-        if c not in circles:
-            curve, start = periodic.iso_circle(s, level, ctx["chain_points"][c], plan["u0"])
+        u0 = float(periodic.surface_uv(s, pos[int(graph.chains[given[0]].verts[0])][None])[0][0])
+    if len(given) > 1 and plan is None:
+        return None  # both ends fixed by neighbours: no common seam
+    levels = plan["levels"] if plan is not None else [None] * len(cids)
+    for c, level in zip(cids, levels):
+        if c in circles:
+            continue
+        if level is not None:
+            curve, start = periodic.iso_circle(s, level, ctx["chain_points"][c], u0)
             circles[c] = (curve, 0.0, 2 * np.pi)
-            _move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
-    return True
+        else:
+            P = geometry.start_at_seam(ctx["chain_points"][c], periodic.seam_at(s, u0))
+            if P is None:
+                return None
+            ctx["chain_points"][c], start, circles[c] = P, P[0], None
+        _move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
+    if plan is not None:
+        plan["u0"] = u0
+        return u0
+    return u0
 
 
 def _loop_points(loops, ctx):
@@ -359,7 +378,10 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         face = mk.Face()
     else:
         surf = ctx["surfaces"][a]
-        if geometry.seam_frame(surf) is not None:  # seam away from the loops' vertices
+        if a in ctx["wraps"]:  # seam through the vertices of its closed edges
+            u0 = ctx["wraps"][a]
+            geom = geometry.occ_surface(surf, u0 if surf.outward else -u0)
+        elif geometry.seam_frame(surf) is not None:  # seam away from the loops' vertices
             ends = [ctx["pos"][int(v)] for lp in loops for c, _ in lp
                     for v in (ctx["chains"][c].verts[0], ctx["chains"][c].verts[-1])]
             geom = geometry.occ_surface(surf, geometry.seam_away_from(surf, np.array(ends)))
@@ -534,9 +556,10 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
         snap[v] = X
     ctx["chain_points"] = [_edge_points(ch, V, pos, projs, vertices, ctx, snap)
                            for ch in graph.chains]
-    plans, circles = _revolved_plans(graph, surfaces, projs,
-                                     lambda a: V[np.unique(F[seg_faces[a]])], pos, vertices, ctx)
-    ctx["revolved"] = plans
+    plans, wraps, circles = _revolved_plans(graph, surfaces, projs,
+                                            lambda a: V[np.unique(F[seg_faces[a]])], pos,
+                                            vertices, ctx)
+    ctx["revolved"], ctx["wraps"] = plans, wraps
     edges = []
     for i, ch in enumerate(graph.chains):
         progress("edges", i / max(len(graph.chains), 1))

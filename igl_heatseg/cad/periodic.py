@@ -27,7 +27,8 @@ from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt  # noqa: E402
 
 from .geometry import seam_frame  # noqa: E402
 
-__all__ = ["surface_uv", "revolved_plan", "revolved_face", "iso_circle"]
+__all__ = ["surface_uv", "wraps_axis", "seam_at", "revolved_plan", "revolved_face",
+           "iso_circle"]
 
 #: Kinds whose u direction is the rotation about the axis (the sphere's frame axis is a fixed
 #: z, unrelated to its loops, so spheres go through ShapeFix_Face).
@@ -58,6 +59,20 @@ def _v_range(s: Surface, v: np.ndarray):
     i = int(np.argmax(gaps))
     lo = w[(i + 1) % len(w)]
     return float(lo), float(lo + 2 * math.pi - gaps[i])
+
+
+def wraps_axis(s: Surface, loop_points: list) -> bool:
+    """Every loop is one closed edge going around the surface's axis."""
+    if s.kind not in REVOLVED_KINDS or not loop_points or any(P is None for P in loop_points):
+        return False
+    return all(np.ptp(np.unwrap(surface_uv(s, P)[0])) >= 1.5 * math.pi for P in loop_points)
+
+
+def seam_at(s: Surface, u0: float):
+    """:func:`~.geometry.seam_frame` turned to the surface's ``u = u0``."""
+    o, a, x0 = seam_frame(s)
+    y0 = np.cross(a, x0) * (1.0 if s.outward else -1.0)  # the u direction of the surface
+    return o, a, math.cos(u0) * x0 + math.sin(u0) * y0
 
 
 def revolved_plan(s: Surface, loop_points: list, seg_points: np.ndarray, tol: float):
@@ -123,9 +138,7 @@ def iso_circle(s: Surface, v: float, P: np.ndarray | None = None, u0: float = 0.
     start : (3,) float64
         Its point at parameter 0.
     """
-    o, a, x0 = seam_frame(s)
-    y0 = np.cross(a, x0) * (1.0 if s.outward else -1.0)  # the u direction of the surface
-    x = math.cos(u0) * x0 + math.sin(u0) * y0
+    o, a, x = seam_at(s, u0)
     p = s.params
     if s.kind == "cylinder":
         C, R = o + v * a, p["radius"]

@@ -2,6 +2,7 @@
 input's face and vertex order. The meshes are made here (a fresh clone has no shared data)."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -187,3 +188,42 @@ def test_cli_polygons_labels_per_input_face(tmp_path):
     assert len(labels) == 54 and set(labels.tolist()) == set(range(6))
     m = load_mesh(p)
     assert m.split_faces == 54 and m.n_input_faces == 54
+
+
+def test_fandisk_with_a_few_zero_area_faces_segments_with_repair(tmp_path, data_dir, capsys):
+    """A few zero-area faces among 14,454 (collapsed edges, collinear corners), as real CAD
+    exports have: refused with the option named, segmented with --repair, every input face
+    labelled."""
+    from igl_heatseg.io import read_mesh_arrays
+
+    V, F = read_mesh_arrays(data_dir / "fandisk.off")
+    V = V.copy()
+    faces = np.random.default_rng(3).choice(len(F), 7, replace=False)
+    for f in faces[:5]:
+        V[F[f, 1]] = V[F[f, 0]]  # edge collapse: the two faces on it lose their area
+    for f in faces[5:]:
+        V[F[f, 2]] = (V[F[f, 0]] + V[F[f, 1]]) / 2  # collinear corners
+    p = tmp_path / "fandisk_zero.off"
+    p.write_bytes(_off(V, F))
+    assert main(["segment", str(p), "-o", str(tmp_path / "s")]) == 2
+    assert "use --repair" in capsys.readouterr().err
+    assert main(["segment", str(p), "-o", str(tmp_path / "s"), "--repair"]) == 0
+    rep = json.loads((tmp_path / "s" / "report.json").read_text())
+    assert rep["repairs"]["zero_area_faces"] == 12 and rep["faces"] == len(F) - 12
+    assert rep["segments"] >= 10
+    labels = np.array((tmp_path / "s" / "labels.txt").read_text().split(), dtype=int)
+    assert len(labels) == len(F) and (labels >= 0).all()
+
+
+SHARED_REPAIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "repair"
+
+
+@pytest.mark.skipif(not SHARED_REPAIR.is_dir(), reason="no ../shared/data/repair")
+@pytest.mark.parametrize(
+    "name", ["cylinder.obj", "halftunnel.off", "teapot.obj", "beetle.off", "truck.obj"]
+)
+def test_shared_repair_meshes_load_with_repair(name):
+    """The public meshes a strict reader refused (see ../shared/data/MANIFEST.md)."""
+    m = load_mesh(SHARED_REPAIR / name, repair=True)
+    assert m.split_faces or any(v for k, v in m.repairs.items() if k != "weld_tolerance")
+    assert len(m.input_face_labels(np.zeros(m.F.shape[0], int))) == m.n_input_faces

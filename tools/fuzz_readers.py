@@ -15,7 +15,7 @@ FILE, "-o", DIR])`` with stderr captured, and is counted as
 
 Usage::
 
-    python tools/fuzz_readers.py --files 5000 [--seed 14] [--show 5] [--keep DIR]
+    python tools/fuzz_readers.py --files 5000 [--seed 14] [--repair] [--show 5] [--keep DIR]
 
 The exit code is 1 when any case was a traceback or a multi-line error. The same module gives
 the test suite its mutations (``tests/test_io.py`` loads it by path): :func:`base_files`,
@@ -344,8 +344,8 @@ def _alarm(signum, frame):
     raise _Timeout()
 
 
-def run_case(path: Path, out: Path, timeout: float) -> tuple[str, str]:
-    """Run ``igl-heatseg segment path -o out`` in-process: (kind, detail)."""
+def run_case(path: Path, out: Path, timeout: float, repair: bool = False) -> tuple[str, str]:
+    """Run ``igl-heatseg segment path -o out [--repair]`` in-process: (kind, detail)."""
     from igl_heatseg.cli import main
 
     err, sout = io.StringIO(), io.StringIO()
@@ -357,7 +357,8 @@ def run_case(path: Path, out: Path, timeout: float) -> tuple[str, str]:
     try:
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(sout), warnings.catch_warnings():
             warnings.simplefilter("default")  # as a fresh process: each warning shown once
-            rc = main(["segment", str(path), "-o", str(out), "--progress", "never"])
+            argv = ["segment", str(path), "-o", str(out), "--progress", "never"]
+            rc = main(argv + (["--repair"] if repair else []))
     except _Timeout:
         return "traceback", f"timeout after {timeout:g} s"
     except SystemExit as exc:
@@ -388,6 +389,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds per file")
     ap.add_argument("--show", type=int, default=3, help="examples shown per failure cause")
     ap.add_argument("--keep", metavar="DIR", help="save failing files into DIR")
+    ap.add_argument("--repair", action="store_true", help="run segment with --repair")
     args = ap.parse_args(argv)
 
     counts: Counter = Counter()
@@ -401,7 +403,7 @@ def main(argv: list[str] | None = None) -> int:
             fmt, data, names = make_case(args.seed, i)
             path = tmp / f"case{i:05d}{EXT[fmt]}"
             path.write_bytes(data)
-            kind, detail = run_case(path, tmp / "out", args.timeout)
+            kind, detail = run_case(path, tmp / "out", args.timeout, args.repair)
             counts[kind] += 1
             per_format[fmt][kind] += 1
             if kind == "clean" and path.name not in detail:
@@ -418,7 +420,10 @@ def main(argv: list[str] | None = None) -> int:
                     (Path(args.keep) / path.name).write_bytes(data)
             path.unlink()
     dt = time.perf_counter() - t0
-    print(f"fuzz_readers: {args.files} files, seed {args.seed}, {dt:.1f} s")
+    print(
+        f"fuzz_readers: {args.files} files, seed {args.seed}"
+        f"{', segment --repair' if args.repair else ''}, {dt:.1f} s"
+    )
     print(
         f"  success {counts['success']}, clean error {counts['clean']}, "
         f"multi-line error {counts['multiline']}, traceback {counts['traceback']}"

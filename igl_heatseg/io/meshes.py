@@ -193,7 +193,7 @@ def _read_off(data: bytes, name: str):
     text = _text(data, name)
     rows: list[tuple[int, list[str]]] = []
     for lineno, raw in enumerate(text.splitlines(), start=1):
-        t = raw.split("#", 1)[0].split()
+        t = (raw.split("#", 1)[0] if "#" in raw else raw).split()
         if t:
             rows.append((lineno, t))
     if not rows:
@@ -245,32 +245,36 @@ def _read_off(data: bytes, name: str):
 
 def _polygon_rows(rows: list[tuple[int, list[str]]], name: str):
     """Parse OFF/PLY-ascii face rows ``k i0 i1 ... ik-1 [extra]``: (sizes, flat indices)."""
-    sizes = np.empty(len(rows), dtype=np.int64)
-    flat: list[str] = []
-    owner: list[int] = []
-    for r, (ln, t) in enumerate(rows):
-        where = f"{name}: line {ln}"
-        k = _int(t[0], where, "face vertex count")
-        _check_face_size(k, where)
-        if len(t) < k + 1:
-            raise MeshError(f"{where}: a face of {k} vertices lists only {len(t) - 1} indices")
-        sizes[r] = k
-        flat.extend(t[1 : k + 1])
-        owner.append(r)
-    return sizes, _index_array(flat, sizes, rows, name)
-
-
-def _index_array(flat: list[str], sizes: np.ndarray, rows, name: str) -> np.ndarray:
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     try:
-        if all(_INT_RE.match(t) and len(t) < 18 for t in flat):
-            return np.array(flat, dtype=np.int64) if flat else np.zeros(0, np.int64)
+        sizes = np.array([t[0] for _, t in rows], dtype=np.int64)
+        ok = bool(((sizes >= 3) & (sizes <= MAX_POLYGON)).all())
     except (ValueError, OverflowError):
-        pass
-    ends = np.cumsum(sizes)
-    for i, t in enumerate(flat):
-        r = int(np.searchsorted(ends, i, side="right"))
-        _int(t, f"{name}: line {rows[r][0]}", "face vertex index")
-    raise MeshError(f"{name}: face vertex indices could not be read")  # pragma: no cover
+        ok = False
+    if ok:
+        lens = np.array([len(t) for _, t in rows], dtype=np.int64)
+        ok = bool((lens > sizes).all())
+    if not ok:  # find the first bad row and name it
+        for ln, t in rows:
+            where = f"{name}: line {ln}"
+            k = _int(t[0], where, "face vertex count")
+            _check_face_size(k, where)
+            if len(t) < k + 1:
+                raise MeshError(f"{where}: a face of {k} vertices lists only {len(t) - 1} indices")
+    k0 = int(sizes[0])
+    if (sizes == k0).all():
+        flat = [c for _, t in rows for c in t[1 : k0 + 1]]
+    else:
+        flat = [c for (_, t), k in zip(rows, sizes.tolist()) for c in t[1 : k + 1]]
+    try:
+        return sizes, np.array(flat, dtype=np.int64)
+    except (ValueError, OverflowError):
+        ends = np.cumsum(sizes)
+        for i, t in enumerate(flat):
+            r = int(np.searchsorted(ends, i, side="right"))
+            _int(t, f"{name}: line {rows[r][0]}", "face vertex index")
+        raise MeshError(f"{name}: face vertex indices could not be read") from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -285,7 +289,7 @@ def _read_obj(data: bytes, name: str):
     flat: list[int] = []
     nv = 0
     for lineno, raw in enumerate(text.splitlines(), start=1):
-        t = raw.split("#", 1)[0].split()
+        t = (raw.split("#", 1)[0] if "#" in raw else raw).split()
         if not t:
             continue
         if t[0] == "v":

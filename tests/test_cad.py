@@ -172,6 +172,29 @@ def test_torus_ring():
     assert fid["volume"] == pytest.approx(2 * math.pi**2 * R * r**2, rel=1e-6)
 
 
+def test_capsule_hemisphere_cap_and_closed_sphere():
+    R, H = 1.0, 1.5
+    phi = np.linspace(0, np.pi / 2, 9)[1:-1]
+    prof = polyline([(0, 0), (R, 0)], 3) + polyline([(R, 0), (R, H)], 4)[1:] \
+        + [(R * np.cos(p), H + R * np.sin(p)) for p in phi] + [(0, H + R)]
+    V, F, labels = revolve(prof, [0] * 3 + [1] * 4 + [2] * 8)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": R}),
+             Surface("sphere", {"center": H * Z, "radius": R})]
+    fid = build_brep(V, F, labels, surfs).fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 3
+    assert fid["volume"] == pytest.approx(math.pi * R**2 * H + 2 / 3 * math.pi * R**3, rel=1e-6)
+    # a whole sphere: one segment without any boundary
+    phi = np.linspace(-np.pi / 2, np.pi / 2, 13)
+    prof = np.c_[R * np.cos(phi), R * np.sin(phi)]
+    prof[[0, -1], 0] = 0.0  # poles exactly on the axis
+    V, F, labels = revolve(prof, [0] * 12)
+    res = build_brep(V, F, labels, [Surface("sphere", {"center": np.zeros(3), "radius": R})])
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and face_types(res.shape) == ["GeomAbs_Sphere"]
+    assert fid["volume"] == pytest.approx(4 / 3 * math.pi * R**3, rel=1e-6)
+
+
 def test_freeform_height_field_one_bspline_face():
     n = 24
     t = np.linspace(0, 1, n + 1)
@@ -190,6 +213,10 @@ def test_freeform_height_field_one_bspline_face():
     assert face_types(res.shape) == ["GeomAbs_BSplineSurface"]
     assert fid["hausdorff"] < 2 * tol
     assert fid["free_edges"] > 0  # an open patch
+    # with a given chart (the xy coordinates) instead of the computed one
+    uv = [(np.arange(len(V)), V[:, :2].copy())]
+    res = build_brep(V, F, np.zeros(len(F), np.int64), surfs, uv=uv, tol=tol)
+    assert res.faces[0]["status"] == "built" and res.fidelity["hausdorff"] < 2 * tol
 
 
 def test_noisy_cube_still_closes():

@@ -501,6 +501,7 @@ SMALL = {
     "cylinder": lambda rng: cylinder_patch(rng, 5.0, math.radians(30), 1.0),  # 30-deg wedge
     "torus": lambda rng: torus_patch(rng, 10.0, 1.0, np.pi / 2, 0, np.pi / 2),  # convex fillet
     "torus ": lambda rng: torus_patch(rng, 4.0, 1.0, np.pi / 3, np.pi / 2, np.pi),  # concave
+    "torus  ": lambda rng: torus_patch(rng, 10.0, 1.0, np.pi / 12, 0, np.pi / 2),  # 15-deg arc
     "cone": lambda rng: cone_patch(rng, 0.5, 2 * np.pi, 1.0, 1.1),  # narrow frustum band
     "cone ": lambda rng: cone_patch(rng, 0.3, np.pi / 3, 1.0, 2.0),  # 60-degree wedge
     "sphere": lambda rng: sphere_patch(rng, 3.0, 0.3),  # small cap
@@ -552,7 +553,8 @@ def test_analytic_jacobians_match_central_differences():
         (F._cylinder_res(a0, n0)[0], [0.1, -0.2, 0.3, 0.5, 0.4]),
         (F._cylinder_res(a0, n0)[0], [0.05, 0.1, -0.3, 0.2, 1e-9]),  # nearly a plane
         (F._cone_res(a0), [0.1, -0.2, 0.3, 0.2, 1.5, 0.4]),
-        (F._torus_res(a0), [0.1, -0.2, 0.3, 0.2, 0.1, 3.0, 1.0]),
+        (F._torus_res(a0, np.array([0.3, -0.2, 0.1]), 3.0)[0],
+         [0.1, -0.2, 0.3, 0.2, 0.1, 3.2, 1.0]),
     ]
     for make_res, t in cases:
         res, t = make_res(X, sw), np.array(t)

@@ -790,22 +790,23 @@ def fit_torus(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | No
     Xs, Ns, ws = _seed_sample(X, N, wn)
     seeds = [_torus_seed(Xs, Ns, ws, *_revolution_axis(Xs, Ns, ws)), _spine_seed(Xs, Ns, ws)]
     costs = []
-    for a0, x0 in (e for e in seeds if e is not None):  # refine the better seed only
-        r = _torus_res(a0)(Xs, np.sqrt(ws))(x0)
-        costs.append((float(r @ r), a0, x0))
+    for a0, x0 in (e for e in seeds if e is not None and e[1][5] > 0):
+        u0, v0 = _frame(a0)  # seeds give the centre as c1 u0 + c2 v0 + h0 a0, then R, r
+        make_res, geometry = _torus_res(a0, x0[2] * u0 + x0[3] * v0 + x0[4] * a0, x0[5])
+        x0 = np.r_[np.zeros(5), x0[5:]]
+        r = make_res(Xs, np.sqrt(ws))(x0)
+        costs.append((float(r @ r), make_res, geometry, x0))
     if not costs:
         return None
-    _, a0, x0 = min(costs, key=lambda e: e[0])
-    sol = _run_lm(_torus_res(a0), X, wn, x0, give_up)
+    _, make_res, geometry, x0 = min(costs, key=lambda e: e[0])  # refine the better seed only
+    sol = _run_lm(make_res, X, wn, x0, give_up)
     if sol is None:
         return None
     t = sol[0]
-    u0, v0 = _frame(a0)
-    a = _chart(a0, u0, v0, t[0], t[1])
+    a, _, _, _, _, center = geometry(t)
     R, r = float(t[5]), abs(float(t[6]))
     if not (TORUS_MIN_MAJOR * r < R < FAR_RATIO) or r == 0:
         return None
-    center = t[2] * u0 + t[3] * v0 + t[4] * a
     params = {"center": m + sc * center, "axis": a, "major_radius": sc * R,
               "minor_radius": sc * r}
     return _finish("torus", params, P, N, wn, _area(w))
@@ -869,30 +870,52 @@ def _spine_seed(X, N, wn):
     return a, np.array([0.0, 0.0, c2[0], c2[1], wn @ (Q @ a), R, abs(r)])
 
 
-def _torus_res(a0):
-    u0, v0 = _frame(a0)
+def _torus_res(a0, C0, R0):
+    """Residual factory of the torus (and its geometry) about the spine point ``q`` nearest
+    the data: parameters ``[s, t, q1, q2, phi, R, r]``, axis ``a = chart(a0; s, t)``, spine
+    point ``q = q0 + q1 u0 + q2 a0``, radial direction ``u`` (``u0`` turned by ``phi`` about
+    ``a0``, made normal to ``a``), centre ``q - R u``. Turning the axis turns the torus about
+    the data, not about its far centre, so fillets on short arcs converge quadratically."""
+    u0 = _perp(-C0[None], a0)[0]
+    u0 = u0 / np.linalg.norm(u0) if np.linalg.norm(u0) > 1e-9 else _frame(a0)[0]
+    t0 = _orth(a0, u0)
+    q0 = C0 + R0 * u0
+    e1, e2 = _frame(a0)
+
+    def geometry(t):
+        a, da = _chart_d(a0, e1, e2, t[0], t[1])
+        mv = math.cos(t[4]) * u0 + math.sin(t[4]) * t0
+        mm = mv - (mv @ a) * a
+        L = max(math.sqrt(mm @ mm), 1e-300)  # 0 only if the axis turned onto u: rejected
+        u = mm / L
+        return a, da, mv, u, L, q0 + t[2] * u0 + t[3] * a0 - t[5] * u
 
     def make_res(Xa, sw):
         def res(t, jac=False):
-            a, da = _chart_d(a0, u0, v0, t[0], t[1])
-            x = Xa - (t[2] * u0 + t[3] * v0)
+            a, da, mv, u, L, C = geometry(t)
+            x = Xa - C
             h = x @ a
             Rv = x - np.outer(h, a)
             rho = _rownorm(Rv)
-            e = np.hypot(rho - t[5], h - t[4])
+            e = np.hypot(rho - t[5], h)
             if not jac:
                 return sw * (e - t[6])
             es = np.maximum(e, 1e-300)
-            g0, g1 = (rho - t[5]) / es, (h - t[4]) / es  # unit direction in the half-plane
+            g0, g1 = (rho - t[5]) / es, h / es  # unit direction in the half-plane
             U = Rv / np.maximum(rho, 1e-300)[:, None]
-            gx = g0[:, None] * U + g1[:, None] * a
-            ga = -(g0 * h)[:, None] * U + g1[:, None] * x
-            J = np.c_[ga @ da[0], ga @ da[1], -(gx @ u0), -(gx @ v0), -g1, -g0,
+            gx = g0[:, None] * U + g1[:, None] * a  # d(d)/dx = -d(d)/dC
+            ga = -(g0 * h)[:, None] * U + g1[:, None] * x  # d(d)/da at fixed x
+            Pu = np.eye(3) - np.outer(u, u)
+            dmv = -math.sin(t[4]) * u0 + math.cos(t[4]) * t0
+            du = [Pu @ (-(mv @ d) * a - (mv @ a) * d) / L for d in da]
+            du.append(Pu @ (dmv - (dmv @ a) * a) / L)
+            J = np.c_[ga @ da[0] + t[5] * (gx @ du[0]), ga @ da[1] + t[5] * (gx @ du[1]),
+                      -(gx @ u0), -(gx @ a0), t[5] * (gx @ du[2]), gx @ u - g0,
                       np.full(len(e), -1.0)]
             return sw * (e - t[6]), J * sw[:, None]
         return res
 
-    return make_res
+    return make_res, geometry
 
 
 _FITTERS = {"plane": fit_plane, "cylinder": fit_cylinder, "cone": fit_cone,

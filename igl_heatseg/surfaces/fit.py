@@ -76,6 +76,9 @@ LM_EXACT_COST = 1e-28
 #: With a give-up level (fit_surface: GIVE_UP_FACTOR * tol), stop once the cost is above it and
 #: an iteration gains less than this fraction.
 LM_GIVE_UP_GAIN = 1e-2
+#: ... but not before this many iterations (the right kind from a poor seed, e.g. a fillet on a
+#: short arc with noisy normals, also starts slowly).
+LM_GIVE_UP_AFTER = 10
 #: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
 #: well-spread samples the fitted parameters change by far less than the noise.
 LM_MAX_POINTS = 1500
@@ -248,7 +251,7 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
     if not (math.isfinite(cost) and np.all(np.isfinite(J))):
         return None
     lam = 1e-3
-    for _ in range(max_iter):
+    for it in range(max_iter):
         if cost <= LM_EXACT_COST:
             break
         g, H = J.T @ r, J.T @ J
@@ -268,7 +271,7 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
         gain = cost - cn
         x, r, J, cost = x + step, rn, Jn, cn
         lam = max(lam * 0.1, 1e-12)
-        if cost > give_up and gain < LM_GIVE_UP_GAIN * (cost + gain):
+        if it >= LM_GIVE_UP_AFTER and cost > give_up and gain < LM_GIVE_UP_GAIN * (cost + gain):
             break
         if gain <= LM_RTOL * cost + 1e-300 or np.linalg.norm(step) < LM_XTOL:
             break

@@ -184,7 +184,10 @@ def test_ply_polygons_binary_mixed_sizes(tmp_path):
 def test_obj_index_zero_and_out_of_range(tmp_path):
     assert "index 0" in _err(tmp_path, "z.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")
     msg = _err(tmp_path, "r.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
-    assert msg == "r.obj: line 4: face vertex index 9 refers to no vertex (3 read so far)"
+    assert msg == "r.obj: line 4: face vertex index 9 refers to no vertex (the file has 3)"
+    # a vertex after the face using it is fine (positive indices count in the whole file)
+    (tmp_path / "fwd.obj").write_bytes(b"v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n")
+    assert load_mesh(tmp_path / "fwd.obj").F.tolist() == [[0, 1, 2]]
     msg = _err(tmp_path, "r.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 8\n")
     assert "r.off: 1 face(s) have vertex indices outside 0..2: face 0 = [0, 1, 8]" in msg
 

@@ -287,6 +287,7 @@ def _read_obj(data: bytes, name: str):
     vlines: list[int] = []
     sizes: list[int] = []
     flat: list[int] = []
+    flines: list[int] = []
     nv = 0
     for lineno, raw in enumerate(text.splitlines(), start=1):
         t = (raw.split("#", 1)[0] if "#" in raw else raw).split()
@@ -307,16 +308,24 @@ def _read_obj(data: bytes, name: str):
                 i = _int(tok.split("/", 1)[0], where, "face vertex index")
                 if i == 0:
                     raise MeshError(f"{where}: OBJ vertex index 0 (OBJ counts from 1)")
-                # 1-based; negative = relative to the vertices read so far.
-                j = i - 1 if i > 0 else nv + i
-                if not 0 <= j < nv:
+                # 1-based (checked against the final count below: a vertex may come after
+                # the face using it); negative = relative to the vertices read so far.
+                if i < 0 and nv + i < 0:
                     raise MeshError(
                         f"{where}: face vertex index {i} refers to no vertex ({nv} read so far)"
                     )
-                flat.append(j)
+                flat.append(i - 1 if i > 0 else nv + i)
             sizes.append(len(t) - 1)
+            flines.append(lineno)
     if not vt and not sizes:
         raise MeshError(f"{name}: no 'v' or 'f' lines: not an OBJ mesh")
+    big = [k for k, j in enumerate(flat) if j >= nv]
+    if big:
+        f = int(np.searchsorted(np.cumsum(sizes), big[0], side="right"))
+        raise MeshError(
+            f"{name}: line {flines[f]}: face vertex index {flat[big[0]] + 1} refers to no "
+            f"vertex (the file has {nv})"
+        )
     V = _float_array(vt, lambda i: f"{name}: line {vlines[i // 3]}", "vertex coordinate")
     return V.reshape(-1, 3), np.array(sizes, dtype=np.int64), np.array(flat, dtype=np.int64)
 

@@ -6,9 +6,8 @@ import pytest
 from meshes import cube, cylinder, disk, grid, sphere
 
 from igl_heatseg.heat.certify import merge_topk, topk_rows
-from igl_heatseg.heat.exact import seed_face_labels
+from igl_heatseg.heat.exact import HeatSolver, seed_face_labels
 from igl_heatseg.heat.fast import FastHeatSolver
-from igl_heatseg.heat.exact import HeatSolver
 from igl_heatseg.segmentation.seeds import seed_groups, seed_mask
 
 #: Agreement of exact temperatures from the two factorizations (CHOLMOD vs libigl).
@@ -171,8 +170,8 @@ def _segment(mesh, solver, monkeypatch):
 
 
 def test_segment_mesh_fast_equals_exact_on_noisy_fandisk(data_dir, monkeypatch):
-    from igl_heatseg.mesh.checks import validate_mesh
     from igl_heatseg.io.meshes import load_mesh
+    from igl_heatseg.mesh.checks import validate_mesh
 
     path = data_dir / "fandisk.off"
     if not path.exists():

@@ -1015,8 +1015,11 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
     choice breaks): the kinds are nested (a huge sphere is a plane, a thin cone a cylinder), so
     a more complex kind always fits a little better and must beat the noise to be chosen. The
     search stops at the first candidate within tolerance (``rms <= tol`` and
-    ``max_dev <= MAX_DEV_FACTOR * tol``) and returns the current choice; when none is within
-    tolerance the result is ``freeform`` (with the best candidate's rms and max_dev, or nan).
+    ``max_dev <= MAX_DEV_FACTOR * tol``) and returns the current choice (that candidate, or a
+    simpler kind it does not clearly beat, whose rms is then below BEAT_FACTOR * tol); when
+    none is within tolerance the result is ``freeform`` (with the best candidate's rms and
+    max_dev, or nan). Candidates still above GIVE_UP_FACTOR * tol after LM_GIVE_UP_AFTER
+    iterations stop refining once they creep (a wrong kind; its rms only ranks it).
 
     Parameters
     ----------

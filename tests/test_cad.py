@@ -89,7 +89,7 @@ def revolve(profile, seg, n_around: int = 48):
 def polyline(points, n):
     """Points along a polyline, n segments per leg."""
     out = [points[0]]
-    for p, q in zip(points[:-1], points[1:]):
+    for p, q in zip(points[:-1], points[1:], strict=True):
         for t in np.linspace(0, 1, n + 1)[1:]:
             out.append(tuple((1 - t) * np.asarray(p) + t * np.asarray(q)))
     return out
@@ -292,3 +292,6 @@ def test_bad_input_raises_mesh_error():
         build_brep(V, F, labels + 1, box_planes())
     with pytest.raises(MeshError, match="V must be"):
         build_brep(V[:, :2], F, labels, box_planes())
+    with pytest.raises(MeshError, match=r"uv\[1\] UV"):
+        build_brep(V, F, labels, box_planes(), uv=[None, (np.arange(3), np.zeros((2, 2)))] +
+                   [None] * 4)

@@ -140,11 +140,27 @@ def _validate(V, F, labels, surfaces, uv):
                         f"found {labels.min()}..{labels.max()}")
     if not all(isinstance(s, Surface) for s in surfaces):
         raise MeshError("surfaces must be igl_heatseg.surfaces.model.Surface objects")
-    if uv is not None and len(uv) != k:
-        raise MeshError(f"uv must have one entry (or None) per segment: {k}, got {len(uv)}")
+    if uv is not None:
+        _validate_uv(uv, k, len(V))
     if not np.all(np.isfinite(V)):
         raise MeshError(f"V (shape {V.shape}) has non-finite coordinates")
     return V, F, labels
+
+
+def _validate_uv(uv, k: int, n: int) -> None:
+    if len(uv) != k:
+        raise MeshError(f"uv must have one entry (or None) per segment: {k}, got {len(uv)}")
+    for a, entry in enumerate(uv):
+        if entry is None:
+            continue
+        ids, UV = (np.asarray(x) for x in entry)
+        if ids.ndim != 1 or not np.issubdtype(ids.dtype, np.integer) or \
+                (len(ids) and (ids.min() < 0 or ids.max() >= n)):
+            raise MeshError(f"uv[{a}] vertex ids must be (p,) int64 in 0..{n - 1}, "
+                            f"got shape {ids.shape} dtype {ids.dtype}")
+        if UV.shape != (len(ids), 2) or not np.all(np.isfinite(UV)):
+            raise MeshError(f"uv[{a}] UV must be ({len(ids)}, 2) finite float64, "
+                            f"got shape {UV.shape}")
 
 
 def _segment(V, F, faces):
@@ -163,10 +179,11 @@ def _surface_for(a, s, V, F, faces, uv, tol):
         return geom, geometry.Projector(s, geom), dev, None
     UV = None
     if uv is not None and uv[a] is not None:
-        ids, UVg = uv[a]
-        pos = np.searchsorted(verts, np.asarray(ids))
+        ids, UVg = (np.asarray(x) for x in uv[a])
+        if not np.array_equal(np.unique(ids), verts):
+            return None, None, math.nan, "given chart does not cover the segment's vertices"
         UV = np.zeros((len(verts), 2))
-        UV[pos] = np.asarray(UVg, dtype=np.float64)
+        UV[np.searchsorted(verts, ids)] = np.asarray(UVg, dtype=np.float64)
     else:
         UV = freeform.disk_chart(V[verts], Fl)
         if UV is None:
@@ -324,7 +341,7 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
     cids = [lp[0][0] for lp in graph.loops[a]]
     if plan is not None and any(circles.get(c) is not None and
                                 _circle_gap(circles[c][0], s, lv, ctx) > tol
-                                for c, lv in zip(cids, plan["levels"])):
+                                for c, lv in zip(cids, plan["levels"], strict=True)):
         plan = None
     given = [c for c in cids if c in circles]
     u0 = 0.0
@@ -333,7 +350,7 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
     if len(given) > 1 and plan is None:
         return None  # both ends fixed by neighbours: no common seam
     levels = plan["levels"] if plan is not None else [None] * len(cids)
-    for c, level in zip(cids, levels):
+    for c, level in zip(cids, levels, strict=True):
         if c in circles:
             continue
         if level is not None:
@@ -546,7 +563,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
         g, p, d, r = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
         geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
     timings["surfaces"] = time.perf_counter() - t
-    ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons) if r is None])
+    ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons, strict=True)
+                                          if r is None])
     t = time.perf_counter()
     pos = _place_vertices(V, graph, projs, ctx["tol"], ctx)
     ctx["pos"], ctx["chains"] = pos, graph.chains

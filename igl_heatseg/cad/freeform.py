@@ -110,7 +110,8 @@ def _orient(UV, F):
 
 def _signed_areas(UV, F):
     a, b, c = UV[F[:, 0]], UV[F[:, 1]], UV[F[:, 2]]
-    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    e1, e2 = b - a, c - a
+    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
 
 def _locate(UV, F, Q):
@@ -171,7 +172,8 @@ def _approximate(grid: np.ndarray, tol: float):
             x = grid[i, j]
             arr.SetValue(i + 1, j + 1, gp_Pnt(float(x[0]), float(x[1]), float(x[2])))
     fit = GeomAPI_PointsToBSplineSurface(arr, Approx_ParametrizationType.Approx_IsoParametric,
-                                         DEG_MIN, SURF_DEG_MAX, GeomAbs_Shape.GeomAbs_C2, float(tol))
+                                         DEG_MIN, SURF_DEG_MAX, GeomAbs_Shape.GeomAbs_C2,
+                                         float(tol))
     if not fit.IsDone():
         return None
     return fit.Surface()
@@ -182,7 +184,7 @@ def _vertex_error(surf, V, UV, box):
     su = u0 + (UV[:, 0] - box[0]) / (box[1] - box[0]) * (u1 - u0)
     sv = v0 + (UV[:, 1] - box[2]) / (box[3] - box[2]) * (v1 - v0)
     err = 0.0
-    for p, a, b in zip(V, su, sv):
+    for p, a, b in zip(V, su, sv, strict=True):
         q = surf.Value(float(a), float(b))
         err = max(err, float(np.linalg.norm(p - (q.X(), q.Y(), q.Z()))))
     return err

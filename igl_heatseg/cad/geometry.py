@@ -41,8 +41,8 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector", "onto_surfaces",
-           "edge_curve", "curve_distance"]
+__all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector",
+           "onto_surfaces", "edge_curve", "curve_distance"]
 
 #: Singular values of the stacked surface normals below this fraction of the largest are
 #: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
@@ -169,7 +169,8 @@ def occ_surface(s: Surface, seam_angle: float = 0.0):
     if s.kind == "plane":
         return Geom_Plane(_ax3(p["point"], p["normal"], True))
     if s.kind == "cylinder":
-        return Geom_CylindricalSurface(_ax3(p["point"], p["axis"], s.outward, seam_angle), float(p["radius"]))
+        return Geom_CylindricalSurface(_ax3(p["point"], p["axis"], s.outward, seam_angle),
+                                       float(p["radius"]))
     if s.kind == "cone":
         return Geom_ConicalSurface(_ax3(p["apex"], p["axis"], s.outward, seam_angle),
                                    float(p["half_angle"]), 0.0)

@@ -115,7 +115,7 @@ def revolved_plan(s: Surface, loop_points: list, seg_points: np.ndarray, tol: fl
         levels.append(mid)
     if len(set(ends)) != len(ends) or (len(ends) == 1 and not _reaches_apex(s, v0, v1, ends, tol)):
         return None
-    lv = dict(zip(ends, levels))  # one circle: the drill point runs to the apex (v = 0)
+    lv = dict(zip(ends, levels, strict=True))  # one circle: a drill point, apex at v = 0
     return {"levels": levels, "v0": lv.get(0, 0.0), "v1": lv.get(1, 0.0)}
 
 

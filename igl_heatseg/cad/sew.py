@@ -8,6 +8,7 @@ from ._ocp import require_ocp
 
 require_ocp()
 
+from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
@@ -16,7 +17,6 @@ from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
 from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
 from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
 from .fidelity import count_free_edges, faces_of  # noqa: E402

@@ -89,7 +89,7 @@ def _half_edges(F: np.ndarray, n: int):
 def _vertex_sides(F, labels, src, opp, n) -> list:
     """For every vertex, the set of sides around it (labels plus -1 on the mesh boundary)."""
     sides = [set() for _ in range(n)]
-    for f, lab in zip(F.ravel(), np.repeat(labels, 3)):
+    for f, lab in zip(F.ravel(), np.repeat(labels, 3), strict=True):
         sides[f].add(int(lab))
     for v in src[opp < 0]:
         sides[v].add(-1)
@@ -141,7 +141,7 @@ def _pieces(cyc, opp_lab, src, dst, is_corner):
         hs = cyc[i0:] + cyc[:i0]
         return [(int(opp_lab[hs[0]]), [int(src[h]) for h in hs] + [int(src[hs[0]])], hs)]
     out = []
-    for s, e in zip(starts, starts[1:] + [starts[0] + len(cyc)]):
+    for s, e in zip(starts, starts[1:] + [starts[0] + len(cyc)], strict=True):
         hs = [cyc[i % len(cyc)] for i in range(s, e)]
         out.append((int(opp_lab[hs[0]]), [int(src[h]) for h in hs] + [int(dst[hs[-1]])], hs))
     return out
@@ -196,7 +196,7 @@ def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> 
     starts = set()
     for a, ps in pieces:
         loop = []
-        for b, verts, hs in ps:
+        for b, _, hs in ps:
             h = hs[0]
             if b == -1 or a < b:
                 loop.append((edge_chain[(int(src[h]), int(dst[h]))], True))

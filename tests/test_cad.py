@@ -295,3 +295,20 @@ def test_bad_input_raises_mesh_error():
     with pytest.raises(MeshError, match=r"uv\[1\] UV"):
         build_brep(V, F, labels, box_planes(), uv=[None, (np.arange(3), np.zeros((2, 2)))] +
                    [None] * 4)
+
+
+def test_failed_build_writes_the_faceted_model(monkeypatch, tmp_path):
+    import igl_heatseg.cad.build as build_mod
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("simulated OCC failure")
+
+    monkeypatch.setattr(build_mod, "_build_faces", boom)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert res.faceted_model and "simulated" in res.message
+    assert all(f["status"] == "faceted" for f in res.faces)
+    fid = res.fidelity
+    assert fid["faces"] == len(F) and fid["valid"] and fid["solids"] == 1
+    assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
+    assert len(faces_of(read_step(write_step(res.shape, tmp_path / "f.step")))) == len(F)

@@ -1,0 +1,338 @@
+"""Single-mesh jobs: what ``igl-heatseg segment`` and ``igl-heatseg run`` do to one file.
+
+The command line (:mod:`igl_heatseg.cli.segment`, :mod:`igl_heatseg.cli.run`) and the batch
+worker call the same functions here, so a batch writes into ``OUT/<mesh>/`` exactly what the
+single-mesh command writes. Nothing here imports Dask.
+
+:data:`JOB_KINDS` is the table of job kinds ``igl-heatseg batch --command`` accepts. A new kind
+(e.g. ``cad``: segment, fit surfaces, write a STEP file) is one :class:`JobKind` entry: a
+``run(mesh_path, out_dir, **options) -> report`` function writing through
+:func:`~igl_heatseg.io.atomic_dir`, and a ``summarize(report) -> dict`` picking the summary
+columns from its report.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..errors import MeshError
+from ..io import atomic_dir, load_mesh, write_labels, write_run, write_segmentation
+from ..pipeline import run_pipeline
+from ..segmentation import segment_with_mode
+
+__all__ = [
+    "segment_file",
+    "run_file",
+    "JobOutput",
+    "write_pictures",
+    "input_report",
+    "write_input_labels",
+    "named",
+    "JobKind",
+    "JOB_KINDS",
+    "job_kind",
+]
+
+log = logging.getLogger(__name__)
+
+
+def _sized(progress, n_faces: int):
+    """Tell a :class:`~igl_heatseg.cli.Progress`-like display the mesh size (if it asks)."""
+    sized = getattr(progress, "sized", None)
+    return sized(n_faces) if sized is not None else progress
+
+
+@dataclass
+class JobOutput:
+    """What a single-mesh job produced (its files are written already).
+
+    Attributes
+    ----------
+    report : dict
+        What ``report.json`` holds.
+    mesh : CleanMesh
+        The mesh as loaded (``split_faces`` and ``repairs`` tell what loading changed).
+    result : Segmentation or PipelineResult
+    """
+
+    report: dict
+    mesh: object
+    result: object
+
+
+def named(mesh, fn, *a, **kw):
+    """Call ``fn``; a ``ValueError`` from inside the pipeline becomes a
+    :class:`~igl_heatseg.MeshError` whose one-line message starts with the mesh's name."""
+    try:
+        return fn(*a, **kw)
+    except ValueError as exc:
+        msg = " ".join(str(exc).split())
+        if not msg.startswith(f"{mesh.name}:"):
+            msg = f"{mesh.name}: {msg}"
+        raise MeshError(msg) from exc
+
+
+def input_report(mesh, labels=None) -> dict:
+    """Report entries about the input: faces as read, polygons split, repairs.
+
+    ``labels`` (per face of ``mesh.F``) adds ``mixed_label_faces``: input polygons whose
+    triangles got more than one label (labels.txt gives them the label covering most area).
+    """
+    rep: dict = {
+        "input_faces": mesh.n_input_faces,
+        "split_faces": mesh.split_faces,
+        "labels_txt": "one label per input face, in the input's order",
+    }
+    if mesh.repairs:
+        rep["repairs"] = dict(mesh.repairs)
+    if labels is not None and mesh.face_map is not None:
+        lab = np.asarray(labels)
+        pairs = np.unique(np.stack([mesh.face_map, lab], axis=1), axis=0)
+        rep["mixed_label_faces"] = int(len(pairs) - len(np.unique(pairs[:, 0])))
+    return rep
+
+
+def write_input_labels(out_dir, mesh, labels) -> None:
+    """Rewrite ``labels.txt`` with one label per input face (polygons and faces dropped by
+    repair included; see :meth:`~igl_heatseg.mesh.CleanMesh.input_face_labels`); a no-op when
+    the faces are the input's."""
+    if not mesh.same_faces:
+        write_labels(Path(out_dir) / "labels.txt", mesh.input_face_labels(labels))
+
+
+def segment_file(
+    mesh_path: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    mode: str = "paper",
+    theta: float | None = None,
+    eps: float | None = None,
+    solver: str = "fast",
+    repair: bool = False,
+    progress=None,
+) -> JobOutput:
+    """Load, segment and write one mesh: what ``igl-heatseg segment MESH -o OUT`` does.
+
+    Parameters
+    ----------
+    mesh_path : str or path-like
+        ``.obj``, ``.off``, ``.ply`` or ``.stl``.
+    out : str or path-like
+        Output folder, written atomically (:func:`~igl_heatseg.io.atomic_dir`): ``labels.txt``,
+        ``vertex_labels.txt``, ``segmented.ply``, ``report.json`` (written last).
+    mode, theta, eps, solver
+        As for :func:`~igl_heatseg.segmentation.segment_with_mode`.
+    repair : bool
+        ``load_mesh(mesh_path, repair=True)``.
+    progress : callable(stage, fraction), optional
+
+    Returns
+    -------
+    JobOutput
+
+    Raises
+    ------
+    MeshError
+        The file cannot be read or is not a valid mesh; nothing is written.
+    """
+    t0 = time.perf_counter()
+    if progress is not None:
+        progress("loading", 0.0)
+    mesh = load_mesh(mesh_path, repair=repair)
+    t_load = time.perf_counter() - t0
+    if progress is not None:
+        progress = _sized(progress, mesh.F.shape[0])
+        progress("loading", 1.0)
+    seg = named(mesh, segment_with_mode, mesh, mode, theta, eps, progress=progress, solver=solver)
+    extra = {"input": str(Path(mesh_path).resolve()), "timings": {"load": t_load}}
+    extra.update(input_report(mesh, seg.labels))
+    with atomic_dir(out) as tmp:
+        report = write_segmentation(tmp, mesh, seg, extra, t_start=t0)
+        write_input_labels(tmp, mesh, seg.labels)
+    if progress is not None:
+        progress("done", 1.0)
+    return JobOutput(report, mesh, seg)
+
+
+def write_pictures(out: Path, res) -> dict:
+    """Render ``segmentation.png`` and ``checker.png`` into ``out`` (needs the ``viz`` extra;
+    skipped with a warning without it). Returns ``{"files": {...}, "seconds": float}``."""
+    t = time.perf_counter()
+    try:
+        from ..viz import write_run_pictures
+
+        out.mkdir(parents=True, exist_ok=True)
+        written = write_run_pictures(out, res.mesh, res.segmentation, res.charts)
+    except ImportError as exc:  # viz needs the `viz` extra
+        log.warning("no pictures: %s", exc)
+        written = {}
+    return {"files": written, "seconds": time.perf_counter() - t}
+
+
+def run_file(
+    mesh_path: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    mode: str = "paper",
+    theta: float | None = None,
+    eps: float | None = None,
+    solver: str = "fast",
+    energy: str = "auto",
+    cut: str = "auto",
+    cut_paths=(),
+    pictures: bool = True,
+    repair: bool = False,
+    progress=None,
+) -> JobOutput:
+    """Load, run the pipeline and write one mesh: what ``igl-heatseg run MESH -o OUT`` does.
+
+    Parameters
+    ----------
+    mesh_path, out, repair
+        As for :func:`segment_file`; ``out`` also gets ``charts/chart_NNN.obj``, ``atlas.obj``
+        and, with ``pictures``, ``segmentation.png`` and ``checker.png``.
+    mode, theta, eps, solver, energy, cut, cut_paths
+        As for :func:`~igl_heatseg.pipeline.run_pipeline`.
+    pictures : bool
+        Render the pictures (skipped with a warning without the ``viz`` extra).
+    progress : callable(stage, fraction), optional
+
+    Returns
+    -------
+    JobOutput
+        ``report["parameterization"]`` sums up the charts; ``result`` is the
+        :class:`~igl_heatseg.pipeline.PipelineResult`.
+    """
+    t0 = time.perf_counter()
+    mesh = load_mesh(mesh_path, repair=repair)
+    t_load = time.perf_counter() - t0
+    if progress is not None:
+        progress = _sized(progress, mesh.F.shape[0])
+    res = named(
+        mesh,
+        run_pipeline,
+        mesh,
+        theta=theta,
+        eps=eps,
+        solver=solver,
+        mode=mode,
+        energy=energy,
+        cut=cut,
+        cut_paths=list(cut_paths or []),
+        progress=progress,
+    )
+    extra = {"input": str(Path(mesh_path).resolve()), "timings": {"load": t_load}}
+    extra.update(input_report(mesh, res.segmentation.labels))
+    with atomic_dir(out) as tmp:
+        pics = write_pictures(tmp, res) if pictures else None
+        report = write_run(tmp, res, extra, t_start=t0, pictures=pics)
+        write_input_labels(tmp, mesh, res.segmentation.labels)
+    return JobOutput(report, mesh, res)
+
+
+def _small_mesh():
+    import igl
+
+    from ..mesh import validate_mesh
+
+    V, F = igl.icosahedron()
+    V = V * [2.0, 1.0, 1.0]  # an ellipsoid: more than one segment, nothing degenerate
+    return validate_mesh(*igl.loop(V, F, 2))
+
+
+def _warm_segment() -> None:
+    segment_with_mode(_small_mesh(), "paper")
+
+
+def _warm_run() -> None:
+    run_pipeline(_small_mesh())
+
+
+def _summarize_segment(report: dict) -> dict:
+    return {"faces": report.get("faces"), "segments": report.get("segments")}
+
+
+def _summarize_run(report: dict) -> dict:
+    s = report.get("parameterization", {})
+    return {
+        "faces": report.get("faces"),
+        "segments": report.get("segments"),
+        "charts": s.get("charts_total"),
+        "bijective": s.get("charts_bijective"),
+        "fallback": s.get("charts_fallback"),
+    }
+
+
+@dataclass(frozen=True)
+class JobKind:
+    """One kind of per-mesh job a batch can run.
+
+    Attributes
+    ----------
+    name : str
+        ``--command`` value.
+    run : callable
+        ``run(mesh_path, out_dir, **options) -> JobOutput`` (or the report dict); writes
+        ``out_dir`` atomically (``report.json`` last) and raises
+        :class:`~igl_heatseg.MeshError` on a bad mesh.
+    summarize : callable
+        ``summarize(report) -> dict`` with any of the summary columns ``faces``, ``segments``,
+        ``charts``, ``bijective``, ``fallback``.
+    options : tuple of str
+        Keyword options ``run`` accepts (others given to a batch are dropped).
+    pictures : tuple of str
+        Picture files the gallery shows, when present.
+    warm_up : callable, optional
+        Run once in the job server before its first child (in memory, nothing written), so
+        that lazy imports and first-call costs are paid once per worker, not once per mesh.
+    """
+
+    name: str
+    run: Callable[..., dict]
+    summarize: Callable[[dict], dict]
+    options: tuple = ()
+    pictures: tuple = field(default=())
+    warm_up: Callable[[], None] | None = None
+
+
+#: ``--command`` -> job kind. ``cad`` goes here when the cad stage has its single-mesh command.
+JOB_KINDS: dict[str, JobKind] = {
+    "segment": JobKind(
+        "segment",
+        segment_file,
+        _summarize_segment,
+        ("mode", "theta", "eps", "solver", "repair"),
+        warm_up=_warm_segment,
+    ),
+    "run": JobKind(
+        "run",
+        run_file,
+        _summarize_run,
+        ("mode", "theta", "eps", "solver", "energy", "cut", "pictures", "repair"),
+        ("segmentation.png", "checker.png"),
+        warm_up=_warm_run,
+    ),
+}
+
+
+def job_kind(name: str) -> JobKind:
+    """The :class:`JobKind` called ``name``.
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the known ones).
+    """
+    try:
+        return JOB_KINDS[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown batch command {name!r}; known: {', '.join(sorted(JOB_KINDS))}"
+        ) from None

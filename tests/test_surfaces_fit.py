@@ -565,3 +565,29 @@ def test_analytic_jacobians_match_central_differences():
         e = 1e-6
         Jfd = np.stack([(res(t + e * u) - res(t - e * u)) / (2 * e) for u in np.eye(len(t))], 1)
         assert np.abs(J - Jfd).max() < 1e-7 * np.abs(Jfd).max()
+
+
+def test_abc_cad_patches_get_their_brep_types(data_dir):
+    """ABC model 00007974_5 (15,702 faces, exact B-Rep face labels: 14 planes, 10 cylinders):
+    with the mesh's own tolerance each patch gets its B-Rep type, but patch 22, a thin round
+    tessellated by two strips turning 141 degrees (no fit can tell it from a crease)."""
+    import igl
+
+    V, F = igl.read_triangle_mesh(str(data_dir / "abc_00007974_5.ply"))
+    V, F = V.astype(np.float64), F.astype(np.int64)
+    labels = np.loadtxt(data_dir / "abc_00007974_5.facelabels.txt", dtype=np.int64)
+    types = dict(line.split() for line in open(data_dir / "abc_00007974_5.surface_types.txt"))
+    noise = noise_level(V, F)
+    h = np.mean(np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1))
+    assert noise < 1e-6 * h  # exact CAD tessellation
+    tol = fit_tolerance(V, F, noise=noise)
+    wrong, wrong_seg = set(), set()
+    for k in np.unique(labels):
+        faces = np.flatnonzero(labels == k)
+        P, N, w = face_samples(V, F, faces)
+        if fit_surface(P, N, w, tol=tol).kind != types[str(k)].lower():
+            wrong.add(int(k))
+        tol_k = fit_tolerance(V, F, noise=noise, faces=faces)
+        if fit_surface(P, N, w, tol=tol_k).kind != types[str(k)].lower():
+            wrong_seg.add(int(k))
+    assert wrong <= {22} and wrong_seg <= {22}

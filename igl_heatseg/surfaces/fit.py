@@ -1255,19 +1255,31 @@ def _ring_quadric_ratios(V, A, val, n, h):
     return rss / dof / (chi2.median(dof) / dof)
 
 
-def _chord_error(V, F, faces=None) -> float:
+def _segment_chord_error(V, F, faces) -> float:
+    """Chord error of one segment, known to be one surface (no crease cut): each edge, a chord
+    of length ``c`` between vertices whose normals (from the segment's faces only) differ by
+    ``theta``, has sagitta ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of the edges
+    with ``theta >= FLAT_ANGLE`` (so a few mislabelled faces across a crease do not count)."""
+    verts, inv = np.unique(F[faces], return_inverse=True)
+    Vl, Fl = V[verts], inv.reshape(-1, 3).astype(np.int64)
+    VN = igl.per_vertex_normals(Vl, Fl, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    E = igl.edges(Fl)
+    theta = np.arccos(np.clip(np.einsum("ij,ij->i", VN[E[:, 0]], VN[E[:, 1]]), -1.0, 1.0))
+    keep = theta >= FLAT_ANGLE  # also drops nan normals of degenerate faces
+    if not np.any(keep):
+        return 0.0
+    c = _rownorm(Vl[E[keep, 0]] - Vl[E[keep, 1]])
+    return float(np.quantile(0.5 * c * np.tan(theta[keep] / 4.0), CHORD_QUANTILE))
+
+
+def _chord_error(V, F) -> float:
     """Chord (sagitta) error of the tessellation's curved facets: for each interior edge whose
     dihedral angle ``theta`` lies in [FLAT_ANGLE, CREASE_ANGLE], a circular arc through the two
     faces with their mean height ``c`` across the edge as chords has sagitta
-    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those (edges between two of
-    ``faces`` only, when given)."""
+    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those."""
     TT = igl.triangle_triangle_adjacency(F)[0]
     f, e = np.nonzero(TT > np.arange(len(F))[:, None])  # each interior edge once
     g = TT[f, e]
-    if faces is not None:
-        inside = np.zeros(len(F), bool)
-        inside[faces] = True
-        f, e, g = f[inside[f] & inside[g]], e[inside[f] & inside[g]], g[inside[f] & inside[g]]
     FN = igl.per_face_normals(V, F, np.zeros(3))
     theta = np.arccos(np.clip(np.einsum("ij,ij->i", FN[f], FN[g]), -1.0, 1.0))
     keep = (theta >= FLAT_ANGLE) & (theta <= CREASE_ANGLE)
@@ -1305,7 +1317,8 @@ def fit_tolerance(V, F, noise: float | None = None, faces=None) -> float:
         the whole mesh: pass it once computed when calling per segment).
     faces : (k,) array_like of int, or (m,) bool, optional
         One segment's faces: its own chord error instead of the whole mesh's (a coarse small
-        hole next to a finely tessellated large fillet).
+        hole next to a finely tessellated large fillet), from the turn of its vertex normals
+        along each edge, without a crease cut (facets of a thin fillet may turn by 90 degrees).
 
     Returns
     -------
@@ -1325,6 +1338,9 @@ def fit_tolerance(V, F, noise: float | None = None, faces=None) -> float:
         noise = noise_level(V, F)
     elif not (math.isfinite(noise) and noise >= 0):
         raise MeshError(f"noise must be a finite float >= 0, got {noise!r}")
-    chord = _chord_error(V, F, None if faces is None else _check_faces(faces, len(F)))
+    if faces is None:
+        chord = _chord_error(V, F)
+    else:
+        chord = _segment_chord_error(V, F, _check_faces(faces, len(F)))
     h = igl.avg_edge_length(V, F)
     return float(math.hypot(K_NOISE * noise, K_CHORD * chord) + K_FLOOR * h)

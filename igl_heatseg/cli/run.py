@@ -5,25 +5,19 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-import time
 from pathlib import Path
 
-from ..io import atomic_dir, write_run
-from ..pipeline import run_pipeline
+from ..batch.jobs import run_file, write_pictures
 from .common import (
     add_progress_argument,
     add_repair_argument,
     add_segment_arguments,
     add_solver_argument,
-    input_report,
-    load_input,
-    named,
     progress_for,
     repair_summary,
-    write_input_labels,
 )
 
-__all__ = ["register", "parse_cut_path"]
+__all__ = ["register", "parse_cut_path", "write_pictures"]
 
 log = logging.getLogger(__name__)
 
@@ -47,47 +41,23 @@ def parse_cut_path(text: str) -> tuple[int, int]:
     return v0, v1
 
 
-def write_pictures(out: Path, res) -> dict:
-    """Render ``segmentation.png`` and ``checker.png`` into ``out`` (needs the ``viz`` extra;
-    skipped with a warning without it). Returns ``{"files": {...}, "seconds": float}``."""
-    t = time.perf_counter()
-    try:
-        from ..viz import write_run_pictures
-
-        out.mkdir(parents=True, exist_ok=True)
-        written = write_run_pictures(out, res.mesh, res.segmentation, res.charts)
-    except ImportError as exc:  # viz needs the `viz` extra
-        log.warning("no pictures: %s", exc)
-        written = {}
-    return {"files": written, "seconds": time.perf_counter() - t}
-
-
 def run(args: argparse.Namespace) -> int:
     """Load, run the pipeline, write the files and pictures; one summary line on stderr."""
-    t0 = time.perf_counter()
-    progress = progress_for(args)
-    mesh = load_input(args)
-    t_load = time.perf_counter() - t0
-    progress.sized(mesh.F.shape[0])
-    res = named(
-        mesh,
-        run_pipeline,
-        mesh,
+    job = run_file(
+        args.mesh,
+        args.out,
+        mode=args.mode,
         theta=args.theta,
         eps=args.eps,
         solver=args.solver,
-        mode=args.mode,
         energy=args.energy,
         cut=args.cut,
         cut_paths=args.cut_path or [],
-        progress=progress,
+        pictures=args.pictures,
+        repair=bool(getattr(args, "repair", False)),
+        progress=progress_for(args),
     )
-    extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
-    extra.update(input_report(mesh, res.segmentation.labels))
-    with atomic_dir(args.out) as tmp:
-        pictures = write_pictures(tmp, res) if args.pictures else None
-        report = write_run(tmp, res, extra, t_start=t0, pictures=pictures)
-        write_input_labels(tmp, mesh, res.segmentation.labels)
+    report, mesh, res = job.report, job.mesh, job.result
     s = report["parameterization"]
     sys.stderr.write(
         f"{Path(args.mesh).name}{repair_summary(mesh)}: {res.segmentation.num_segments} segments, "

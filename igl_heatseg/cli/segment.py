@@ -4,22 +4,16 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
-from ..io import atomic_dir, write_segmentation
-from ..segmentation import segment_with_mode
+from ..batch.jobs import segment_file
 from .common import (
     add_progress_argument,
     add_repair_argument,
     add_segment_arguments,
     add_solver_argument,
-    input_report,
-    load_input,
-    named,
     progress_for,
     repair_summary,
-    write_input_labels,
 )
 
 __all__ = ["register"]
@@ -27,29 +21,18 @@ __all__ = ["register"]
 
 def run(args: argparse.Namespace) -> int:
     """Load, segment, write; one summary line on stderr."""
-    t0 = time.perf_counter()
-    progress = progress_for(args)
-    progress("loading", 0.0)
-    mesh = load_input(args)
-    t_load = time.perf_counter() - t0
-    progress.sized(mesh.F.shape[0])("loading", 1.0)
-    seg = named(
-        mesh,
-        segment_with_mode,
-        mesh,
-        args.mode,
-        args.theta,
-        args.eps,
-        progress=progress,
-        solver=args.solver,
-    )
     out = Path(args.out)
-    extra = {"input": str(Path(args.mesh).resolve()), "timings": {"load": t_load}}
-    extra.update(input_report(mesh, seg.labels))
-    with atomic_dir(out) as tmp:
-        report = write_segmentation(tmp, mesh, seg, extra, t_start=t0)
-        write_input_labels(tmp, mesh, seg.labels)
-    progress("done", 1.0)
+    job = segment_file(
+        args.mesh,
+        out,
+        mode=args.mode,
+        theta=args.theta,
+        eps=args.eps,
+        solver=args.solver,
+        repair=bool(getattr(args, "repair", False)),
+        progress=progress_for(args),
+    )
+    report, mesh = job.report, job.mesh
     print(
         f"{Path(args.mesh).name}: {report['faces']} faces{repair_summary(mesh)}, "
         f"{report['initial_groups']} initial groups -> {report['segments']} segments in "

@@ -5,6 +5,7 @@ tolerance on tessellated meshes, and the Surface distance / projection round tri
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -591,3 +592,22 @@ def test_abc_cad_patches_get_their_brep_types(data_dir):
         if fit_surface(P, N, w, tol=tol_k).kind != types[str(k)].lower():
             wrong_seg.add(int(k))
     assert wrong <= {22} and wrong_seg <= {22}
+
+
+SCAN = Path(__file__).resolve().parents[2] / "shared" / "data" / "scan" / "block_noisy.obj"
+
+
+@pytest.mark.skipif(not SCAN.exists(), reason="shared scan mesh not present")
+def test_noise_level_of_a_noisy_scan_against_its_clean_original(data_dir):
+    """block_noisy.obj is block.ply with noisy vertices (same faces): the estimate matches the
+    true normal component of the displacements, and the clean block measures ~0."""
+    import igl
+
+    V0, F0 = igl.read_triangle_mesh(str(data_dir / "block.ply"))
+    V1, F1 = igl.read_triangle_mesh(str(SCAN))
+    F0, F1 = F0.astype(np.int64), F1.astype(np.int64)
+    assert np.array_equal(F0, F1)
+    VN = igl.per_vertex_normals(V0, F0)
+    true = np.einsum("ij,ij->i", V1 - V0, VN).std()
+    assert noise_level(V1, F1) == pytest.approx(true, rel=0.1)
+    assert noise_level(V0, F0) < 1e-3 * true

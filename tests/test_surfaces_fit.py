@@ -611,3 +611,24 @@ def test_noise_level_of_a_noisy_scan_against_its_clean_original(data_dir):
     true = np.einsum("ij,ij->i", V1 - V0, VN).std()
     assert noise_level(V1, F1) == pytest.approx(true, rel=0.1)
     assert noise_level(V0, F0) < 1e-3 * true
+
+
+ABC6 = Path(__file__).resolve().parents[2] / "shared" / "data" / "mechanical" / "abc_00000006_0"
+
+
+@pytest.mark.skipif(not ABC6.with_suffix(".obj").exists(), reason="shared ABC mesh not present")
+def test_abc_cones_and_cylinder_get_their_brep_types():
+    """ABC model 00000006_0 (32,664 faces; 8 planes, 6 cones, 1 cylinder): every exact B-Rep
+    patch gets its type with the mesh's own tolerance, cones with their 45-degree angle."""
+    import igl
+
+    V, F = igl.read_triangle_mesh(str(ABC6.with_suffix(".obj")))
+    V, F = V.astype(np.float64), F.astype(np.int64)
+    labels = np.loadtxt(f"{ABC6}.facelabels.txt", dtype=np.int64)
+    types = dict(line.split() for line in open(f"{ABC6}.surface_types.txt"))
+    tol = fit_tolerance(V, F)
+    for k in np.unique(labels):
+        s = fit_surface(*face_samples(V, F, np.flatnonzero(labels == k)), tol=tol)
+        assert s.kind == types[str(k)].lower()
+        if s.kind == "cone":
+            assert s.params["half_angle"] == pytest.approx(math.pi / 4, abs=0.01)

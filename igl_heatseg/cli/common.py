@@ -17,10 +17,6 @@ __all__ = [
     "add_progress_argument",
     "progress_for",
     "add_repair_argument",
-    "load_input",
-    "named",
-    "input_report",
-    "write_input_labels",
     "repair_summary",
 ]
 
@@ -145,61 +141,6 @@ def add_repair_argument(p: argparse.ArgumentParser) -> None:
         "report.json `repairs`, outputs stay in the input's face and vertex order (a dropped "
         "face takes the label across its longest edge, -1 when there is none)",
     )
-
-
-def load_input(args: argparse.Namespace):
-    """``load_mesh(args.mesh, repair=args.repair)``."""
-    from ..io import load_mesh
-
-    return load_mesh(args.mesh, repair=bool(getattr(args, "repair", False)))
-
-
-def named(mesh, fn, *a, **kw):
-    """Call ``fn``; a ``ValueError`` from inside the pipeline becomes a ``MeshError`` whose
-    one-line message starts with the mesh's name (``name: ...``)."""
-    from ..errors import MeshError
-
-    try:
-        return fn(*a, **kw)
-    except ValueError as exc:
-        msg = " ".join(str(exc).split())
-        if not msg.startswith(f"{mesh.name}:"):
-            msg = f"{mesh.name}: {msg}"
-        raise MeshError(msg) from exc
-
-
-def input_report(mesh, labels=None) -> dict:
-    """Report entries about the input: faces as read, polygons split, repairs.
-
-    ``labels`` (per face of ``mesh.F``) adds ``mixed_label_faces``: input polygons whose
-    triangles got more than one label (labels.txt gives them the label covering most area).
-    """
-    import numpy as np
-
-    rep: dict = {
-        "input_faces": mesh.n_input_faces,
-        "split_faces": mesh.split_faces,
-        "labels_txt": "one label per input face, in the input's order",
-    }
-    if mesh.repairs:
-        rep["repairs"] = dict(mesh.repairs)
-    if labels is not None and mesh.face_map is not None:
-        lab = np.asarray(labels)
-        pairs = np.unique(np.stack([mesh.face_map, lab], axis=1), axis=0)
-        rep["mixed_label_faces"] = int(len(pairs) - len(np.unique(pairs[:, 0])))
-    return rep
-
-
-def write_input_labels(out_dir, mesh, labels) -> None:
-    """Rewrite ``labels.txt`` with one label per input face (polygons and faces dropped by
-    repair included; see :meth:`~igl_heatseg.mesh.CleanMesh.input_face_labels`); a no-op when
-    the faces are the input's."""
-    from pathlib import Path
-
-    from ..io import write_labels
-
-    if not mesh.same_faces:
-        write_labels(Path(out_dir) / "labels.txt", mesh.input_face_labels(labels))
 
 
 def repair_summary(mesh) -> str:

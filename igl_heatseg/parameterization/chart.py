@@ -52,6 +52,9 @@ __all__ = [
     "attempt_plan",
     "parameterize_chart",
     "HLLE_SKIP_CURVATURE",
+    "HESSIAN_MARGIN",
+    "QUALITY_TRY_ABOVE",
+    "CHOICES",
     "ENERGIES",
     "FALLBACKS",
 ]
@@ -68,6 +71,26 @@ log = logging.getLogger(__name__)
 #: scan charts (noise makes every angle defect count: 131k of its 160k faces; 6.2 of 7.6 s of
 #: failed HLLE attempts).  The skip is recorded in ``attempts``.
 HLLE_SKIP_CURVATURE: float = 8.0 * np.pi
+
+#: Quality choice (``choose="quality"``): the bijective Hessian map is kept when its symmetric
+#: Dirichlet energy is at most this factor above the best bijective candidate's (the paper's
+#: map stays the answer where it is good).
+HESSIAN_MARGIN: float = 1.02
+
+#: Symmetric Dirichlet energy of an isometry (every map has at least this).
+SD_ISOMETRY: float = 4.0
+
+#: Alternatives to a bijective Hessian map (SLIM started from it, Tutte + SLIM) are computed
+#: only when its energy is above this: ``SD_ISOMETRY * HESSIAN_MARGIN``, below which no
+#: candidate can beat it by more than the margin (every map has energy >= 4).
+QUALITY_TRY_ABOVE: float = SD_ISOMETRY * HESSIAN_MARGIN
+
+#: Quality candidates stop SLIM once an iteration lowers the symmetric Dirichlet energy by
+#: less than this fraction (:func:`~.fallback.slim_guarded`'s ``stall``).
+SLIM_STALL: float = 1e-3
+
+#: Values of ``choose`` accepted by :func:`parameterize_chart`.
+CHOICES: tuple[str, ...] = ("quality", "first")
 
 #: Values of ``energy`` accepted by :func:`parameterize_chart`.
 ENERGIES: tuple[str, ...] = ("hlle", "curved", "auto")
@@ -154,6 +177,7 @@ class Candidate:
     cert: Certificate
     method: str
     eigenvalues: np.ndarray | None = None
+    sym_dirichlet: float = float("nan")
 
 
 @dataclass
@@ -168,6 +192,14 @@ class _State:
     current: Candidate | None = None  # the map the chart has now
     total_abs_curvature: float | None = None
     skip_hlle: bool = False
+    candidates: list = field(default_factory=list)  # every certified map, for the choice
+
+    def offer(self, cand: Candidate) -> Candidate:
+        """Measure a candidate's symmetric Dirichlet energy and keep it for the choice."""
+        c = self.chart
+        cand.sym_dirichlet = float(distortion(c.V, c.F, cand.UV)["sym_dirichlet"])
+        self.candidates.append(cand)
+        return cand
 
     def best_hessian(self) -> Candidate | None:
         """The bijective Hessian map, else the easiest to repair (no overlaps, fewest local
@@ -250,12 +282,14 @@ def _hessian_attempt(energy: str) -> Attempt:
         if not ok:
             return {"method": meth, "bijective": False, "error": "eigen-solve failed"}
         UV, cert = certify_oriented(UV, c.V, c.F, st.name, [c.boundary])
-        st.hessian.append(Candidate(UV, cert, meth, lam))
+        cand = st.offer(Candidate(UV, cert, meth, lam))
+        st.hessian.append(cand)
         st.current = st.best_hessian()
         tac = st.total_abs_curvature
         return {
             "method": meth,
             **cert.summary(),
+            "sym_dirichlet": cand.sym_dirichlet,
             "null_dim": null_dim,
             **({"total_abs_curvature": tac} if tac is not None and energy == "hlle" else {}),
         }
@@ -301,7 +335,8 @@ def _repair_attempt(fallback: str) -> Attempt:
             "kept": bool(keep),
         }
         if keep:
-            st.current = Candidate(UVr, cert_r, f"{cur.method}+repair", cur.eigenvalues)
+            st.current = st.offer(Candidate(UVr, cert_r, f"{cur.method}+repair", cur.eigenvalues))
+            record["sym_dirichlet"] = st.current.sym_dirichlet
         return record
 
     return Attempt("repair", applies, run)
@@ -315,7 +350,9 @@ def _tutte_attempt() -> Attempt:
         )
         lam = st.current.eigenvalues if st.current is not None else None
         st.current = Candidate(UV, cert, "tutte", lam)
-        return {"method": "tutte", **cert.summary()}
+        if cert.bijective:
+            st.offer(st.current)
+        return {"method": "tutte", **cert.summary(), "sym_dirichlet": st.current.sym_dirichlet}
 
     return Attempt("tutte", lambda st: not st.bijective(), run)
 
@@ -338,16 +375,98 @@ def _slim_attempt(iterations: int, fixed: bool) -> Attempt:
         UV, cert, acc, good = slim_guarded(
             c.V, c.F, start.UV, iterations, st.name, bnd, loops=[c.boundary]
         )
-        if acc > 0:
-            st.current = Candidate(UV, cert, meth, start.eigenvalues)
-        return {
+        record = {
             "method": meth,
             "accepted_iterations": acc,
             "bijective_iterations": good,
             **(cert.summary() if cert else start.cert.summary()),
         }
+        if acc > 0:
+            st.current = st.offer(Candidate(UV, cert, meth, start.eigenvalues))
+            record["sym_dirichlet"] = st.current.sym_dirichlet
+        return record
 
     return Attempt(meth, applies, run)
+
+
+def _needs_alternatives(st: _State) -> bool:
+    """A bijective Hessian map (repaired or not) whose energy leaves room for a better map."""
+    cur = st.current
+    return (
+        cur is not None
+        and cur.method.startswith("hessian-")
+        and cur.cert.bijective
+        and cur.sym_dirichlet > QUALITY_TRY_ABOVE
+    )
+
+
+def _hessian_slim_attempt(iterations: int) -> Attempt:
+    """Quality candidate: guarded SLIM (free boundary) started from the bijective Hessian map."""
+
+    def applies(st: _State) -> bool:
+        return iterations > 0 and _needs_alternatives(st)
+
+    def run(st: _State) -> dict:
+        c, start = st.chart, st.current
+        UV, cert, acc, good = slim_guarded(
+            c.V, c.F, start.UV, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+        )
+        meth = f"{start.method}+slim"
+        record = {"method": meth, "accepted_iterations": acc, "bijective_iterations": good}
+        if acc > 0:
+            cand = st.offer(Candidate(UV, cert, meth, start.eigenvalues))
+            record.update(**cert.summary(), sym_dirichlet=cand.sym_dirichlet)
+        else:
+            record["bijective"] = False
+        return record
+
+    return Attempt("hessian+slim", applies, run)
+
+
+def _tutte_slim_candidate_attempt(iterations: int) -> Attempt:
+    """Quality candidate: Tutte + guarded SLIM next to a bijective Hessian map whose energy
+    (even after SLIM from it) leaves room."""
+
+    def applies(st: _State) -> bool:
+        if iterations <= 0 or not _needs_alternatives(st):
+            return False
+        best = min(c.sym_dirichlet for c in st.candidates if c.cert.bijective)
+        return best > QUALITY_TRY_ABOVE
+
+    def run(st: _State) -> dict:
+        c = st.chart
+        UVt, cert_t = certify_oriented(
+            tutte_map(c.V, c.F, c.boundary), c.V, c.F, st.name, [c.boundary]
+        )
+        record = {"method": "tutte+slim", "candidate": True}
+        if not cert_t.bijective:
+            return {**record, **cert_t.summary()}
+        UV, cert, acc, good = slim_guarded(
+            c.V, c.F, UVt, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+        )
+        record.update(accepted_iterations=acc, bijective_iterations=good)
+        if acc > 0:
+            cand = st.offer(Candidate(UV, cert, "tutte+slim", st.current.eigenvalues))
+            record.update(**cert.summary(), sym_dirichlet=cand.sym_dirichlet)
+        else:
+            record["bijective"] = False
+        return record
+
+    return Attempt("tutte+slim-candidate", applies, run)
+
+
+def _choose(st: _State) -> None:
+    """Quality choice among the certified bijective candidates: the lowest symmetric Dirichlet
+    energy, unless the Hessian map (the paper's) is within :data:`HESSIAN_MARGIN` of it."""
+    good = [c for c in st.candidates if c.cert.bijective and np.isfinite(c.sym_dirichlet)]
+    if not good or st.current is None:
+        return
+    best = min(good, key=lambda c: c.sym_dirichlet)
+    cur = st.current
+    if cur.cert.bijective and cur.sym_dirichlet <= HESSIAN_MARGIN * best.sym_dirichlet:
+        if cur.method.startswith("hessian-"):
+            return
+    st.current = best
 
 
 def attempt_plan(
@@ -357,12 +476,13 @@ def attempt_plan(
     slim_iterations: int = SLIM_ITERATIONS,
     repair: bool = True,
     hlle_skip_curvature: float | None = HLLE_SKIP_CURVATURE,
+    choose: Literal["quality", "first"] = "quality",
 ) -> list[Attempt]:
     """The ordered attempts of :func:`parameterize_chart` (each runs only when it applies).
 
     Parameters
     ----------
-    energy, fallback, slim_iterations, repair, hlle_skip_curvature
+    energy, fallback, slim_iterations, repair, hlle_skip_curvature, choose
         As in :func:`parameterize_chart`.
 
     Returns
@@ -373,8 +493,8 @@ def attempt_plan(
     --------
     >>> [a.method for a in attempt_plan("auto")]  # doctest: +NORMALIZE_WHITESPACE
     ['curvature-test', 'hessian-hlle', 'hessian-curved', 'repair', 'tutte', 'tutte+slim',
-     'tutte+slim-fixed']
-    >>> [a.method for a in attempt_plan("curved", "none")]
+     'tutte+slim-fixed', 'hessian+slim', 'tutte+slim-candidate']
+    >>> [a.method for a in attempt_plan("curved", "none", choose="first")]
     ['hessian-curved']
     """
     plan = []
@@ -383,12 +503,17 @@ def attempt_plan(
     for en in ("hlle", "curved") if energy == "auto" else (energy,):
         plan.append(_hessian_attempt(en))
     if fallback == "none":
-        return plan
+        return plan + ([_hessian_slim_attempt(slim_iterations)] if choose == "quality" else [])
     if repair:
         plan.append(_repair_attempt(fallback))
     plan.append(_tutte_attempt())
     if fallback == "tutte+slim":
         plan += [_slim_attempt(slim_iterations, False), _slim_attempt(slim_iterations, True)]
+    if choose == "quality":
+        plan += [
+            _hessian_slim_attempt(slim_iterations),
+            _tutte_slim_candidate_attempt(slim_iterations),
+        ]
     return plan
 
 
@@ -401,6 +526,7 @@ def parameterize_chart(
     slim_iterations: int = SLIM_ITERATIONS,
     repair: bool = True,
     hlle_skip_curvature: float | None = HLLE_SKIP_CURVATURE,
+    choose: Literal["quality", "first"] = "quality",
     name: str = "chart",
     **energy_kwargs,
 ) -> ChartParam:
@@ -437,6 +563,13 @@ def parameterize_chart(
         is above this (default :data:`HLLE_SKIP_CURVATURE`, ``8 pi``; measured: HLLE was never
         bijective above 13.3).  The skipped attempt is listed in ``attempts`` with
         ``"skipped": True`` and the ``reason``.  ``None`` never skips.
+    choose : {"quality", "first"}
+        ``"quality"`` (default): when the Hessian map is bijective but its symmetric Dirichlet
+        energy is above :data:`QUALITY_TRY_ABOVE`, also compute SLIM started from it and
+        Tutte + SLIM, and keep the certified bijective map of lowest energy unless the
+        Hessian map is within :data:`HESSIAN_MARGIN` of it; every map is scaled to the
+        chart's true size (UV area = 3D area).  ``"first"``: the first bijective map of the
+        attempt order (the Hessian map's own Gram-corrected scale; Tutte scaled to the area).
     name : str
         Chart name for messages.
     **energy_kwargs
@@ -473,18 +606,23 @@ def parameterize_chart(
         raise MeshError(
             f"{name}: `fallback` must be 'tutte+slim', 'tutte' or 'none', got {fallback!r}"
         )
+    if choose not in CHOICES:
+        raise MeshError(f"{name}: `choose` must be 'quality' or 'first', got {choose!r}")
     plan = attempt_plan(
         energy,
         fallback,
         slim_iterations=slim_iterations,
         repair=repair,
         hlle_skip_curvature=hlle_skip_curvature,
+        choose=choose,
     )
     with limit_blas_threads(BLAS_THREADS):
         t0 = time.perf_counter()
         st = _State(prepare_chart(V, F, name), name, energy_kwargs)
         _run_plan(st, plan, fallback)
-        return _result(st, energy, t0)
+        if choose == "quality":
+            _choose(st)
+        return _result(st, energy, t0, true_scale=choose == "quality")
 
 
 def _run_plan(st: _State, plan: list[Attempt], fallback: str) -> None:
@@ -506,18 +644,17 @@ def _run_plan(st: _State, plan: list[Attempt], fallback: str) -> None:
         )
 
 
-def _result(st: _State, energy: str, t0: float) -> ChartParam:
-    """The chart's :class:`ChartParam` from the final state (scaled back to input units)."""
+def _result(st: _State, energy: str, t0: float, true_scale: bool = False) -> ChartParam:
+    """The chart's :class:`ChartParam` from the final state (scaled back to input units; with
+    ``true_scale`` every map, else only the Tutte map, scaled to UV area = 3D area)."""
     c, cur = st.chart, st.current
     if cur is None:  # every eigen-solve failed and no fallback: a zero map, certified
         UV, cert = certify_oriented(np.zeros((c.V.shape[0], 2)), c.V, c.F, st.name)
         cur = Candidate(UV, cert, f"hessian-{energy}")
     UV = cur.UV
-    if cur.method == "tutte":  # arbitrary scale: match the chart's area
-        a = (
-            0.5
-            * np.abs(np.cross(UV[c.F[:, 1]] - UV[c.F[:, 0]], UV[c.F[:, 2]] - UV[c.F[:, 0]])).sum()
-        )
+    if cur.method == "tutte" or (true_scale and cur.cert.bijective):  # match the chart's area
+        d1, d2 = UV[c.F[:, 1]] - UV[c.F[:, 0]], UV[c.F[:, 2]] - UV[c.F[:, 0]]
+        a = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]).sum()
         UV = UV / np.sqrt(a)
     return ChartParam(
         UV=expand_uv(UV / c.scale, c.used, c.n_input),

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["distortion"]
+__all__ = ["distortion", "singular_values", "face_sym_dirichlet"]
 
 
 def distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> dict:
@@ -46,6 +46,45 @@ def distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> dict:
     4.0
     >>> round(distortion(V, F, V[:, :2] * [2.0, 1.0])["conformal_max"], 12)
     2.0
+    """
+    s1, s2, a3 = singular_values(V, F, UV)
+    w = a3 / a3.sum()
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        conf = np.where(s2 > 0, s1 / s2, np.inf)
+        det = s1 * s2
+        area = np.where(det > 0, np.maximum(det, 1.0 / det), np.inf)
+        sd = np.where(s2 > 0, s1**2 + s1**-2.0 + s2**2 + s2**-2.0, np.inf)
+        stretch = np.where(s2 > 0, np.maximum(s1, 1.0 / s2), np.inf)
+        return {
+            "conformal_mean": float((w * conf).sum()),
+            "conformal_max": float(conf.max()),
+            "area_mean": float((w * area).sum()),
+            "area_max": float(area.max()),
+            "sym_dirichlet": float((w * sd).sum()),
+            "stretch_max": float(stretch.max()),
+        }
+
+
+def singular_values(
+    V: np.ndarray, F: np.ndarray, UV: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-triangle singular values of the map's Jacobian, after the global scale
+    normalisation (total image area := total 3D area), and the 3D triangle areas.
+
+    Returns
+    -------
+    s1, s2 : (m,) float64
+        ``s1 >= s2 >= 0``.
+    a3 : (m,) float64
+        3D areas.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])
+    >>> s1, s2, a3 = singular_values(V, F, V[:, :2] * [2.0, 1.0])
+    >>> round(float(s1[0] * s2[0]), 12), float(a3[0])
+    (1.0, 0.5)
     """
     P0, P1, P2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     e1 = P1 - P0
@@ -82,18 +121,20 @@ def distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> dict:
         J = Wm @ np.linalg.inv(Q)
         sig = np.linalg.svd(J, compute_uv=False)
         s1, s2 = sig[:, 0], sig[:, 1]
-    w = a3 / a3.sum()
+    return s1, s2, a3
+
+
+def face_sym_dirichlet(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> np.ndarray:
+    """Per-triangle symmetric Dirichlet energy ``s1^2 + s1^-2 + s2^2 + s2^-2`` (4 =
+    isometric; ``inf`` for degenerate images), after the global scale normalisation.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])
+    >>> face_sym_dirichlet(V, F, 5 * V[:, :2]).round(12).tolist()
+    [4.0]
+    """
+    s1, s2, _ = singular_values(V, F, UV)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        conf = np.where(s2 > 0, s1 / s2, np.inf)
-        det = s1 * s2
-        area = np.where(det > 0, np.maximum(det, 1.0 / det), np.inf)
-        sd = np.where(s2 > 0, s1**2 + s1**-2.0 + s2**2 + s2**-2.0, np.inf)
-        stretch = np.where(s2 > 0, np.maximum(s1, 1.0 / s2), np.inf)
-        return {
-            "conformal_mean": float((w * conf).sum()),
-            "conformal_max": float(conf.max()),
-            "area_mean": float((w * area).sum()),
-            "area_max": float(area.max()),
-            "sym_dirichlet": float((w * sd).sum()),
-            "stretch_max": float(stretch.max()),
-        }
+        return np.where(s2 > 0, s1**2 + s1**-2.0 + s2**2 + s2**-2.0, np.inf)

@@ -20,6 +20,7 @@ import scipy.sparse.linalg as spla
 
 from ..mesh.topology import boundary_loops
 from .bijectivity import Certificate, certify_map
+from .distortion import distortion
 from .prepare import certify_oriented, unique_edges
 
 __all__ = [
@@ -339,6 +340,7 @@ def slim_guarded(
     name: str,
     bnd: np.ndarray | None = None,
     loops: list[np.ndarray] | None = None,
+    stall: float | None = None,
 ) -> tuple[np.ndarray, Certificate | None, int, int]:
     """SLIM one iteration at a time from a bijective start; keep the last bijective iterate.
 
@@ -354,7 +356,10 @@ def slim_guarded(
     every iterate costs about a third of an iteration (boundary loops passed in); the
     previous scheme (all iterations, then again one at a time when the result failed) cost
     two SLIM runs whenever an overlap occurred.  With ``bnd`` the boundary is held (soft
-    constraint, :data:`SLIM_SOFT_P`) at its start positions.
+    constraint, :data:`SLIM_SOFT_P`) at its start positions.  With ``stall``, SLIM also stops
+    at the first bijective iterate whose symmetric Dirichlet energy is less than ``stall``
+    times its own value below the previous bijective iterate's (converged; started from a
+    Hessian map, SLIM reaches 4.0x within a few iterations).
 
     Early stop: after :data:`SLIM_STOP_AFTER_BAD` consecutive non-bijective iterates that
     follow a bijective one.  On the 20 fallback charts, once an iterate had been bijective,
@@ -392,6 +397,7 @@ def slim_guarded(
         log.warning("%s: SLIM failed: %s", name, exc)
         return UV0, None, 0, 0
     best, best_cert, accepted, good, bad_run = UV0, None, 0, 0, 0
+    prev_sd = np.inf
     for it in range(1, iterations + 1):
         try:
             UV = np.ascontiguousarray(igl.slim_solve(data, 1)[:, :2])
@@ -403,6 +409,11 @@ def slim_guarded(
         UV, cert = certify_oriented(UV, V, F, name, loops)
         if cert.bijective:
             best, best_cert, accepted, good, bad_run = UV, cert, it, good + 1, 0
+            if stall is not None:
+                sd = distortion(V, F, UV)["sym_dirichlet"]
+                if prev_sd - sd < stall * sd:
+                    break
+                prev_sd = sd
         else:
             bad_run += 1
             if accepted > 0 and bad_run >= SLIM_STOP_AFTER_BAD:

@@ -331,3 +331,54 @@ def test_coarse_tessellation_has_the_requested_facets_per_circle(facets):
 def test_bad_cad_facets_raise():
     with pytest.raises(ValueError, match="cad_facets"):
         mp.make_part(0, cad_facets=3)
+
+
+# --------------------------------------------------------------------------------------------
+# tools/make_benchmark_sets.py: the split
+# --------------------------------------------------------------------------------------------
+
+
+def test_benchmark_sets_split_by_family_and_seed():
+    import make_benchmark_sets as mb
+
+    tuning, validation = mb.plan_set("tuning", 40), mb.plan_set("validation", 40)
+    assert not {e["seed"] for e in tuning} & {e["seed"] for e in validation}
+    held_out = set(mb.VALIDATION_ONLY)
+    assert held_out and not held_out & {e["family"] for e in tuning}
+    assert held_out <= {e["family"] for e in validation}
+    assert set(mb.TUNING_FAMILIES) | held_out == set(mp.KINDS)
+    for plan in (tuning, validation):
+        noise = [e["noise"] for e in plan]
+        assert {noise.count(n) for n in mb.NOISE_LEVELS} == {10}  # balanced levels
+        assert {e["tessellation"] for e in plan} == set(mb.TESSELLATIONS)
+        for fam in {e["family"] for e in plan}:  # every family sees several variants
+            mine = [e for e in plan if e["family"] == fam]
+            if len(mine) >= 2:
+                assert len({e["noise"] for e in mine}) == len(mine)
+                assert len({e["tessellation"] for e in mine}) >= 2
+        for e in plan:
+            if e["tessellation"] == "coarse":
+                assert 12 <= e["cad_facets"] <= 24 and e["target_faces"] is None
+            else:
+                assert mb.MIN_FACES <= e["target_faces"] <= mb.MAX_FACES
+    assert mb.plan_set("tuning", 40) == tuning  # deterministic
+    with pytest.raises(ValueError):
+        mb.plan_set("test", 3)
+
+
+def test_benchmark_set_writes_parts_and_manifest(tmp_path, monkeypatch):
+    import json
+
+    import make_benchmark_sets as mb
+
+    monkeypatch.setattr(mb, "MIN_FACES", 2000)
+    monkeypatch.setattr(mb, "MAX_FACES", 2500)  # small parts keep the test fast
+    m = mb.write_set(tmp_path, "validation", 3)
+    on_disk = json.loads((tmp_path / "validation" / "manifest.json").read_text())
+    assert on_disk == json.loads(json.dumps(m))
+    assert [e["family"] for e in m["parts"]] == list(mb.VALIDATION_ONLY[:3])
+    for e in m["parts"]:
+        V, F, labels, types = mp.read_part(tmp_path / "validation" / e["obj"])
+        assert len(F) == e["faces"] and len(types) == e["true_faces"]
+        assert sum(e["types"].values()) == e["true_faces"]
+        assert e["name"] == mb.part_name(e)

@@ -172,3 +172,46 @@ def test_cgal_peer_labels_every_face_of_a_cube_with_planes():
         peers.cgal_ransac(V, F, unassigned="drop")  # checked before CGAL runs
     with pytest.raises(RuntimeError, match="unassigned"):
         peers.cgal_ransac_isolated(V, F, unassigned="drop")
+
+
+# --------------------------------------------------------------------------------------------
+# benchmarks/surface_table.py: scoring, aggregation and report (no CLI, no CGAL)
+# --------------------------------------------------------------------------------------------
+
+
+def test_surface_table_scores_aggregates_and_reports():
+    import surface_table as st
+
+    n = 4
+    V, F = grid(n)
+    truth = cell_labels(n, lambda i, j: int(i >= n // 2))
+    P = V[F]
+    part = dict(
+        V=V,
+        F=F,
+        labels=truth,
+        kinds=sm.face_kinds(truth, ["Plane", "Cylinder"]),
+        area=0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1),
+        true_boundary=sm.boundary_length(V, F, truth),
+    )
+    perfect = st.score(part, 1 - truth, ["cylinder", "plane"])
+    assert perfect["purity"] == perfect["coverage"] == perfect["type_acc"] == 1.0
+    assert perfect["seg_ratio"] == 1.0 and perfect["bnd_ratio"] == 1.0
+    merged = st.score(part, np.zeros(len(F), dtype=int), None)
+    assert merged["purity"] == 0.5 and merged["coverage"] == 1.0 and merged["type_acc"] is None
+    assert merged["bnd_ratio"] == 0.0
+    base = dict(name="p", family="f", seed=1, tessellation="frontal", noise=0.0, faces=len(F))
+    rows = [
+        dict(base, method="a", true_faces=2, **perfect, seconds=1.0, error=None),
+        dict(base, method="b", true_faces=2, **merged, seconds=2.0, error=None),
+        dict(base, method="a", true_faces=2, seconds=None, error="exit 1: boom", noise=0.1),
+    ]
+    agg = st.aggregate(rows, ["a", "b"])
+    assert agg["a"]["passed"] == 1 and agg["a"]["failed"] == 1 and agg["b"]["passed"] == 0
+    assert agg["a"]["passed_by_noise"] == {"0.0": "1/1", "0.1": "0/1"}
+    meta = dict(set="t", date="d", machine="m", command="c", cli="x", igl_heatseg="y", parts=1)
+    md = st.markdown(meta, rows, agg, ["a", "b"])
+    assert "| a | 2 | 1 |" in md and "failed: exit 1: boom" in md
+    assert st._report_types({"surfaces": [{"type": "plane"}]}, 1) == (["plane"], "surfaces")
+    assert st._report_types({"primitive_types": ["Plane", "Other"]}, 2)[1] == "primitive_types"
+    assert st._report_types({"primitive_types": ["Plane"]}, 2) == (None, None)

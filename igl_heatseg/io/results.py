@@ -85,9 +85,17 @@ def write_labels(path: str | os.PathLike, labels: np.ndarray) -> None:
 
 
 def write_segmented_ply(
-    path: str | os.PathLike, V: np.ndarray, F: np.ndarray, labels: np.ndarray
+    path: str | os.PathLike,
+    V: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    surface_kinds: list | None = None,
 ) -> None:
     """Write a binary PLY with a per-face ``label`` and per-face ``red green blue`` colour.
+
+    With ``surface_kinds`` (one kind per label), each face also gets ``uchar surface_type``:
+    its segment's index in :data:`igl_heatseg.surfaces.SURFACE_KINDS` (0 plane, 1 cylinder,
+    2 cone, 3 sphere, 4 torus, 5 freeform); the header's comment lists the codes.
 
     Parameters
     ----------
@@ -97,23 +105,37 @@ def write_segmented_ply(
     F : (m, 3) int64
     labels : (m,) int64
         Face labels ``0..k-1``; colours from :func:`label_colors`.
+    surface_kinds : list of str, optional
+        Surface kind of every label.
     """
+    from ..surfaces.model import SURFACE_KINDS
+
     labels = np.asarray(labels, dtype=np.int64)
     C = label_colors(int(labels.max()) + 1 if len(labels) else 0)[labels]
+    fields = [("n", "u1"), ("v", "<i4", (3,)), ("label", "<i4"), ("r", "u1"), ("g", "u1"),
+              ("b", "u1")]
+    extra = ""
+    if surface_kinds is not None:
+        fields.append(("surface_type", "u1"))
+        codes = " ".join(f"{i}={k}" for i, k in enumerate(SURFACE_KINDS))
+        extra = "property uchar surface_type\n"
     header = (
         "ply\nformat binary_little_endian 1.0\ncomment igl_heatseg segmentation\n"
-        f"element vertex {len(V)}\nproperty double x\nproperty double y\nproperty double z\n"
+        + (f"comment surface_type {codes}\n" if surface_kinds is not None else "")
+        + f"element vertex {len(V)}\nproperty double x\nproperty double y\nproperty double z\n"
         f"element face {len(F)}\nproperty list uchar int vertex_indices\nproperty int label\n"
-        "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\n" + extra
+        + "end_header\n"
     )
-    fdt = np.dtype(
-        [("n", "u1"), ("v", "<i4", (3,)), ("label", "<i4"), ("r", "u1"), ("g", "u1"), ("b", "u1")]
-    )
+    fdt = np.dtype(fields)
     fa = np.zeros(len(F), dtype=fdt)
     fa["n"] = 3
     fa["v"] = F
     fa["label"] = labels
     fa["r"], fa["g"], fa["b"] = C[:, 0], C[:, 1], C[:, 2]
+    if surface_kinds is not None:
+        code = np.array([SURFACE_KINDS.index(k) for k in surface_kinds], dtype=np.uint8)
+        fa["surface_type"] = code[labels]
     with open(path, "wb") as fh:
         fh.write(header.encode("ascii"))
         fh.write(np.ascontiguousarray(V, dtype="<f8").tobytes())
@@ -173,7 +195,10 @@ def write_segmentation(
     ref = mesh.vertex_map >= 0
     vlab[ref] = seg.vertex_labels[mesh.vertex_map[ref]]
     write_labels(out_dir / "vertex_labels.txt", vlab)
-    write_segmented_ply(out_dir / "segmented.ply", mesh.V, mesh.F, seg.labels)
+    kinds = None
+    if getattr(seg, "surfaces", None) is not None:
+        kinds = [s.kind for s in seg.surfaces]
+    write_segmented_ply(out_dir / "segmented.ply", mesh.V, mesh.F, seg.labels, kinds)
     report = {
         "igl_heatseg": __version__,
         "faces": int(mesh.F.shape[0]),
@@ -202,6 +227,9 @@ def write_segmentation(
     if types is not None:
         report["primitive_types"] = list(types)
         report["primitive_rms"] = seg.primitive_rms
+    surfaces = getattr(seg, "surfaces", None)
+    if surfaces is not None:
+        report["surfaces"] = [dict(segment=i, **s.to_dict()) for i, s in enumerate(surfaces)]
     report.update(extra or {})
     timings = dict(report.pop("timings", {}))
     timings.update(seg.timings)

@@ -58,6 +58,8 @@ from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
+from ..surfaces.fit import fit_tolerance
+from ..surfaces.refine import refine_segmentation
 from .denoise import BILATERAL_SIGMA_R, bilateral_normals, denoise_vertices
 from .paper import (
     SOLVERS,
@@ -158,9 +160,12 @@ class RobustSegmentation(Segmentation):
         0 flat, 1 cylindrical, 2 umbilic (step 3 of the module docstring).
     denoised_V : (n, 3) float64
         The surface the heat fields were solved on.
+    surfaces : list of Surface, length k, or None
+        The fitted surface of every segment (:mod:`igl_heatseg.surfaces`), when fitted.
     """
 
     primitive_types: list = field(default_factory=list)
+    surfaces: list | None = None
     primitive_rms: np.ndarray | None = None
     vertex_class: np.ndarray | None = None
     denoised_V: np.ndarray | None = None
@@ -540,6 +545,7 @@ def segment_robust(
     crease_dilation: int = CREASE_DILATION,
     curvature_ring: int = CURVATURE_RING,
     merge: bool = True,
+    fit_surfaces: bool = True,
     solver: str = "fast",
     progress=None,
 ) -> RobustSegmentation:
@@ -568,6 +574,10 @@ def segment_robust(
         Rings of the curvature fit.
     merge : bool
         Merge adjacent segments that one primitive fits (:func:`merge_by_primitives`).
+    fit_surfaces : bool
+        Fit a surface to every segment and refine the segmentation by the fits
+        (:func:`igl_heatseg.surfaces.refine_segmentation`: merge what one surface explains,
+        move boundary faces to the surface they lie on).
     solver : {"fast", "exact"}
         Heat solver, as in :func:`igl_heatseg.segmentation.paper.segment_mesh`.
     progress : callable(stage, fraction), optional
@@ -679,9 +689,21 @@ def segment_robust(
         tol = (MERGE_TOL + MERGE_NOISE * noise_angle) * h
         labels1, merged_primitives = merge_by_primitives(W, F, labels1, tol, topo=topo)
         timings["merge"] = time.perf_counter() - t
+    vlab1 = hl1.vertex_labels
+    surfaces = None
+    if fit_surfaces:
+        t = time.perf_counter()
+        ref = refine_segmentation(W, F, labels1, fit_tolerance(V, F), progress=progress)
+        labels1, k1 = ref.labels, len(ref.surfaces)
+        vlab1 = np.zeros(n, dtype=np.int64)
+        vlab1[F.ravel()] = np.repeat(labels1, 3)
+        surfaces = ref.surfaces
+        timings["surfaces"] = time.perf_counter() - t
     labels, vertex_labels, segment_areas, order = final_numbering(
-        F, labels1, hl1.vertex_labels, face_areas(V, F), k1
+        F, labels1, vlab1, face_areas(V, F), k1
     )
+    if surfaces is not None:
+        surfaces = [surfaces[g] for g in order]
 
     t = time.perf_counter()
     diag = float(np.linalg.norm(W.max(axis=0) - W.min(axis=0)))
@@ -716,6 +738,7 @@ def segment_robust(
         group_component=gcomp,
         mode="robust",
         primitive_types=types,
+        surfaces=surfaces,
         primitive_rms=np.asarray(rms, dtype=np.float64),
         vertex_class=cls,
         denoised_V=W,

@@ -20,7 +20,9 @@ from .fit import (
     within_tolerance,
 )
 from .model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
+from .refine import SurfaceSegmentation, refine_segmentation, segment_adjacency
 
 __all__ = ["SURFACE_KINDS", "ANALYTIC_KINDS", "Surface", "fit_plane", "fit_sphere",
            "fit_cylinder", "fit_cone", "fit_torus", "fit_surface", "surface_residual",
-           "within_tolerance", "face_samples", "face_residuals", "noise_level", "fit_tolerance"]
+           "within_tolerance", "face_samples", "face_residuals", "noise_level", "fit_tolerance",
+           "SurfaceSegmentation", "refine_segmentation", "segment_adjacency"]

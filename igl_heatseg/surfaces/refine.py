@@ -1,0 +1,609 @@
+"""Fit-driven refinement of a segmentation: one fitted surface per segment.
+
+On top of a heat segmentation (the paper's seeds and fields stay the initialisation):
+
+1. **Fit** every segment (:func:`~igl_heatseg.surfaces.fit.fit_surface`: the simplest kind
+   within the mesh's own tolerance, :func:`~igl_heatseg.surfaces.fit.fit_tolerance`).
+2. **Split** every segment that no surface explains by fit-driven region growing inside it
+   (:func:`grow_regions`): seeds from smooth interiors, a surface fitted to the seed's rings,
+   growth over faces whose corners lie on it, refits as the region grows (a small patch of a
+   cylinder looks planar; the refit on the grown region finds the cylinder).
+3. **Merge** adjacent segments that one surface explains within tolerance, cheapest union first
+   (Attene et al. 2006): strips of a coarse cylinder, a plane split by noise.
+4. **Move boundary faces** to the neighbouring surface they lie on, refitting between passes (a
+   Lloyd loop as in variational shape approximation, Cohen-Steiner et al. 2004), so boundaries
+   follow the crease instead of zig-zagging along triangle edges.
+
+Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
+true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from ..mesh.geometry import face_areas, face_normals
+from .fit import fit_surface, fit_tolerance
+from .model import SURFACE_KINDS, Surface
+
+__all__ = [
+    "SurfaceSegmentation",
+    "refine_segmentation",
+    "segment_adjacency",
+    "grow_regions",
+    "vertex_samples",
+]
+
+log = logging.getLogger(__name__)
+
+#: A boundary face moves to a neighbour's surface when its corners' RMS distance to that surface
+#: is below this fraction of the distance to its own.
+MOVE_RATIO = 0.5
+
+#: Lloyd passes: refit, then move the faces on the current boundaries.
+MOVE_PASSES = 4
+
+#: Rounds of (merge, move boundary faces): a move can make two pieces of one surface adjacent.
+ROUNDS = 3
+
+#: A face joins a growing region when its corners' RMS distance to the region's surface is
+#: within GROW_TOL x tol ...
+GROW_TOL = 2.0
+
+#: ... and its normal is within this angle of the surface normal at its centroid (radians; a
+#: facet of a coarse cylinder has the surface normal at its centroid, a face across a crease
+#: does not).
+GROW_ANGLE = math.radians(25.0)
+
+#: When growth stalls, faces within STALL_TOL x tol are tried in a refit of the region (a
+#: cylinder first fitted as a plane on a small patch).
+STALL_TOL = 6.0
+
+#: Rings of neighbours around a seed face in its first fit.
+SEED_RINGS = 2
+
+#: Regions of fewer faces are not kept from a seed (its faces stay free for other seeds).
+MIN_REGION_FACES = 3
+
+#: Two unexplained segments of at most this many faces each are tried in a union.
+MERGE_SMALL_FACES = 64
+
+#: A union is fitted only if one part's surface is within PRECHECK_TOL x tol (RMS) of the
+#: other part's vertices (sampled: about PRECHECK_SAMPLES of them). A part's surface that
+#: misses its neighbour by more cannot become the union's surface, and a more general kind
+#: fitting both would have fitted each part with the same kind.
+PRECHECK_TOL = 10.0
+PRECHECK_SAMPLES = 200
+
+#: Parameters of each kind, and how many samples beyond them a fit needs to count as evidence
+#: (a plane through 4 points has one redundant point; the curved kinds need two).
+_PARAMS = {"plane": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
+MIN_EXTRA_SAMPLES = {"plane": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 2}
+
+#: A fit whose surface normals disagree (by more than GROW_ANGLE) with the face normals on more
+#: than this share of the segment's area does not explain the segment.
+NORMAL_OFF_SHARE = 0.05
+
+#: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
+SHARD_FACES = 8
+
+#: Segments with fewer faces are fitted as freeform (a fit needs a few samples to mean anything).
+MIN_FIT_FACES = 2
+
+
+@dataclass
+class SurfaceSegmentation:
+    """Labels with one fitted surface per segment.
+
+    Attributes
+    ----------
+    labels : (m,) int64
+        ``0..k-1``, largest segment first, every segment face-connected.
+    surfaces : list of Surface, length k
+        The fitted surface of each segment.
+    tol : float
+        The fit tolerance used (model units).
+    split : int
+        Segments split by region growing (step 2).
+    merged : int
+        Merges of adjacent segments (step 3).
+    moved : int
+        Boundary faces moved (step 4).
+    timings : dict
+    """
+
+    labels: np.ndarray
+    surfaces: list
+    tol: float
+    split: int = 0
+    merged: int = 0
+    moved: int = 0
+    timings: dict = field(default_factory=dict)
+
+
+def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Faces on both sides of every interior edge whose two labels differ (each edge once).
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+
+    Returns
+    -------
+    fa, fb : (e,) int64
+        ``fa < fb``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [2, 1, 3]])
+    >>> fa, fb = segment_adjacency(F, np.array([0, 1]))
+    >>> fa.tolist(), fb.tolist()
+    ([0], [1])
+    """
+    TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
+    fa = np.repeat(np.arange(len(F)), 3)
+    fb = TT.ravel()
+    keep = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])
+    return fa[keep], fb[keep]
+
+
+def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray):
+    """Samples to fit a face set: its vertices, with normals from those faces only.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (k,) int64
+        Face ids.
+
+    Returns
+    -------
+    P : (p, 3) float64
+        The faces' vertices.
+    N : (p, 3) float64
+        Area-weighted vertex normals of the face set (a crease with a neighbour does not bend
+        them).
+    w : (p,) float64
+        A third of the incident faces' areas (sums to the set's area).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> P, N, w = vertex_samples(V, np.array([[0, 1, 2], [1, 3, 2]]), np.array([0, 1]))
+    >>> P.shape, round(float(w.sum()), 12), N[0].tolist()
+    ((4, 3), 1.0, [0.0, 0.0, 1.0])
+    """
+    Fs = F[faces]
+    verts, inv = np.unique(Fs, return_inverse=True)
+    inv = inv.reshape(-1, 3)
+    A = face_areas(V, Fs)
+    FN = face_normals(V, Fs)
+    AN = np.repeat(FN * A[:, None], 3, axis=0)  # one row per corner
+    N = np.stack([np.bincount(inv.ravel(), weights=AN[:, c], minlength=len(verts))
+                  for c in range(3)], axis=1)
+    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    w = np.bincount(inv.ravel(), weights=np.repeat(A / 3.0, 3), minlength=len(verts))
+    return V[verts], N, w
+
+
+def _fit(V, F, faces, tol, kinds=None) -> Surface:
+    if len(faces) < MIN_FIT_FACES:
+        return Surface("freeform", {"centroid": V[F[faces]].reshape(-1, 3).mean(axis=0)},
+                       area=float(face_areas(V, F[faces]).sum()))
+    P, N, w = vertex_samples(V, F, faces)
+    # a kind needs more samples than parameters to be evidence (any 4 points lie on a sphere)
+    allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
+                    if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
+    s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
+    if s.is_analytic:
+        # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
+        # three (radius, height) profile points, which a torus always passes through. The face
+        # normals must agree with the surface's too.
+        A = face_areas(V, F[faces])
+        off = _normal_angle(V, F, face_normals(V, F[faces]), np.arange(len(faces)), s,
+                            F[faces]) > GROW_ANGLE
+        if A[off].sum() > NORMAL_OFF_SHARE * A.sum():
+            return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
+                           max_dev=s.max_dev, area=float(A.sum()))
+    return s
+
+
+def _rms_to(V, F, faces, s: Surface) -> float:
+    """RMS distance of (a sample of about PRECHECK_SAMPLES of) the faces' vertices to ``s``."""
+    if not s.is_analytic:
+        return math.inf
+    verts = np.unique(F[faces])
+    verts = verts[:: max(1, len(verts) // PRECHECK_SAMPLES)]
+    d = s.distance(V[verts])
+    return float(np.sqrt((d * d).mean()))
+
+
+def _explains(s: Surface, tol: float) -> bool:
+    return s.is_analytic and s.rms <= tol
+
+
+def _corner_rms(V, F, faces, s: Surface) -> np.ndarray:
+    if not s.is_analytic:
+        return np.full(len(faces), np.inf)
+    d = s.distance(V[F[faces]].reshape(-1, 3)).reshape(-1, 3)
+    return np.sqrt((d * d).mean(axis=1))
+
+
+def _normal_angle(V, F, FN, faces, s: Surface, Fs=None) -> np.ndarray:
+    """Angle between each face's normal and the surface normal at its centroid's projection
+    (``Fs``: the faces' rows when ``FN`` is indexed by position instead of by face id)."""
+    SN = s.normals(V[(F[faces] if Fs is None else Fs)].mean(axis=1))
+    cos = np.abs(np.einsum("ij,ij->i", SN, FN[faces]))
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def _adjacency(F: np.ndarray) -> np.ndarray:
+    TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
+    return TT
+
+
+def _fits_face(V, F, FN, faces, s, tol, k_tol):
+    return (_corner_rms(V, F, faces, s) <= k_tol * tol) & (
+        _normal_angle(V, F, FN, faces, s) <= GROW_ANGLE
+    )
+
+
+def _grow_one(V, F, FN, TT, free, seed, tol):
+    """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface)."""
+    region = np.zeros(len(F), dtype=bool)
+    ring = np.array([seed])
+    patch = [seed]
+    for _ in range(SEED_RINGS):
+        ring = np.unique(TT[ring].ravel())
+        ring = ring[(ring >= 0) & free[np.maximum(ring, 0)]]
+        patch = np.union1d(patch, ring)
+    s = _fit(V, F, np.asarray(patch), tol)
+    if not s.is_analytic:
+        return np.array([seed]), s
+    region[seed] = True
+    fitted = 1
+    stalled = False
+    while True:
+        cand = np.unique(TT[region].ravel())
+        cand = cand[(cand >= 0)]
+        cand = cand[free[cand] & ~region[cand]]
+        ok = _fits_face(V, F, FN, cand, s, tol, GROW_TOL) if len(cand) else np.zeros(0, bool)
+        if ok.any():
+            region[cand[ok]] = True
+            stalled = False
+            n = int(region.sum())
+            if n >= 2 * fitted:
+                s2 = _fit(V, F, np.flatnonzero(region), tol)
+                if _explains(s2, tol):
+                    s, fitted = s2, n
+            continue
+        if stalled or not len(cand):
+            break
+        near = cand[_fits_face(V, F, FN, cand, s, tol, STALL_TOL)]
+        if not len(near):
+            break
+        s2 = _fit(V, F, np.r_[np.flatnonzero(region), near], tol)
+        if not _explains(s2, tol) or s2.max_dev > 3 * tol:
+            break
+        s, stalled = s2, True
+    faces = np.flatnonzero(region)
+    if fitted < len(faces):
+        s2 = _fit(V, F, faces, tol)
+        if _explains(s2, tol):
+            s = s2
+    return faces, s
+
+
+def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
+    """Split a face set into regions that one surface each explains, by region growing.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (k,) int64
+        The face set (a segment).
+    tol : float
+        Fit tolerance (model units).
+    FN : (m, 3) float64, optional
+        Face normals; TT : (m, 3) int64, optional, ``igl.triangle_triangle_adjacency``.
+
+    Returns
+    -------
+    region : (k,) int64
+        Region id of each face of ``faces``, ``0..r-1``; faces no surface explains form
+        regions of their own (their connected pieces).
+    """
+    FN = face_normals(V, F) if FN is None else FN
+    TT = _adjacency(F) if TT is None else TT
+    free = np.zeros(len(F), dtype=bool)
+    free[faces] = True
+    # seeds from smooth interiors first: the largest normal change to a neighbour, ascending
+    nb = TT[faces]
+    cosn = np.where(nb >= 0, np.einsum("ij,ikj->ik", FN[faces], FN[np.maximum(nb, 0)]), 1.0)
+    order = faces[np.argsort(-cosn.min(axis=1), kind="stable")]
+    out = np.full(len(F), -1, dtype=np.int64)
+    tried = np.zeros(len(F), dtype=bool)
+    r = 0
+    for seed in order.tolist():
+        if not free[seed] or tried[seed]:
+            continue
+        grown, s = _grow_one(V, F, FN, TT, free, seed, tol)
+        if len(grown) < MIN_REGION_FACES:
+            tried[grown] = True
+            continue
+        out[grown] = r
+        free[grown] = False
+        r += 1
+    rest = faces[out[faces] < 0]
+    if len(rest):  # what no surface explains: its connected pieces
+        sub = np.full(len(F), -1, dtype=np.int64)
+        sub[rest] = 0
+        comp = _face_connected(F, np.where(out >= 0, out, len(F) + 1 + sub), TT)
+        _, inv = np.unique(comp[rest], return_inverse=True)
+        out[rest] = r + inv
+    return out[faces]
+
+
+def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None) -> int:
+    """Greedy merging of adjacent segments whose union one surface explains; cheapest first.
+
+    ``rejected`` caches the unions found unexplained (keyed by both parts' faces), so a later
+    round does not refit a pair that has not changed.
+    """
+    rejected = set() if rejected is None else rejected
+    parent = {k: k for k in fits}
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    faces_of = {k: np.flatnonzero(labels == k) for k in fits}
+    fa, fb = segment_adjacency(F, labels)
+    pairs = {tuple(sorted(p)) for p in zip(labels[fa].tolist(), labels[fb].tolist(), strict=True)}
+    nbrs: dict[int, set] = {k: set() for k in fits}
+    for a, b in pairs:
+        nbrs[a].add(b)
+        nbrs[b].add(a)
+    heap = []
+
+    def push(a, b):
+        # a union is fitted only when one part's surface already comes near the other part
+        # (the union of two planes at an angle, or of a plane and a fillet, is never tried);
+        # an unexplained piece (a shard of a thin band, a leftover of region growing) may join
+        # a neighbour this way too. When one part's surface already explains the other part,
+        # only its kind is refitted (one fit instead of the search over kinds).
+        key = (len(faces_of[a]), int(faces_of[a].sum()), len(faces_of[b]), int(faces_of[b].sum()))
+        if key in rejected:
+            return
+        da, db = _rms_to(V, F, faces_of[b], fits[a]), _rms_to(V, F, faces_of[a], fits[b])
+        union = np.concatenate([faces_of[a], faces_of[b]])
+        if min(da, db) <= tol:
+            u = _fit(V, F, union, tol, kinds=((fits[a] if da <= db else fits[b]).kind,))
+        elif min(da, db) <= PRECHECK_TOL * tol or (
+            max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
+            and not _explains(fits[a], tol)
+            and not _explains(fits[b], tol)
+        ):
+            u = _fit(V, F, union, tol)
+        else:
+            rejected.add(key)
+            return
+        if not _explains(u, tol):
+            rejected.add(key)
+        else:
+            heapq.heappush(heap, (u.rms, a, b, id(u), u))
+
+    for a, b in sorted(pairs):
+        push(a, b)
+    merged = 0
+    while heap:
+        _, a, b, _, u = heapq.heappop(heap)
+        if find(a) != a or find(b) != b:  # stale: one side was merged since
+            continue
+        parent[b] = a
+        faces_of[a] = np.concatenate([faces_of[a], faces_of.pop(b)])
+        fits[a] = u
+        del fits[b]
+        nbrs[a] = (nbrs[a] | nbrs.pop(b)) - {a, b}
+        for c in nbrs[a]:
+            nbrs[c] = (nbrs[c] - {b}) | {a}
+        merged += 1
+        for c in sorted(nbrs[a]):
+            push(a, c)
+    for k, faces in faces_of.items():
+        labels[faces] = k
+    return merged
+
+
+def _move_boundary_faces(V, F, labels, fits: dict, tol: float) -> int:
+    """Lloyd passes: faces on boundaries go to the neighbouring surface clearly nearer to them;
+    the segments that changed are refitted before the next pass."""
+    moved = 0
+    for _ in range(MOVE_PASSES):
+        fa, fb = segment_adjacency(F, labels)
+        if len(fa) == 0:
+            break
+        cand_face = np.r_[fa, fb]
+        cand_label = np.r_[labels[fb], labels[fa]]
+        own = np.full(len(F), np.inf)
+        for k in np.unique(labels[cand_face]).tolist():
+            sel = np.unique(cand_face[labels[cand_face] == k])
+            own[sel] = _corner_rms(V, F, sel, fits[k])
+        new = labels.copy()
+        best = own.copy()
+        for k in np.unique(cand_label).tolist():
+            if not fits[k].is_analytic:
+                continue
+            sel = cand_face[cand_label == k]
+            d = _corner_rms(V, F, sel, fits[k])
+            ok = (d < MOVE_RATIO * own[sel]) & (d <= GROW_TOL * tol) & (d < best[sel])
+            new[sel[ok]] = k
+            best[sel[ok]] = d[ok]
+        counts = np.bincount(new, minlength=labels.max() + 1)
+        for k in np.flatnonzero((counts == 0) & (np.bincount(labels, minlength=len(counts)) > 0)):
+            new[labels == k] = k  # never empty a segment
+        changed = np.unique(np.r_[labels[new != labels], new[new != labels]])
+        if len(changed) == 0:
+            break
+        moved += int((new != labels).sum())
+        labels[:] = new
+        for k in changed.tolist():
+            fits[k] = _fit(V, F, np.flatnonzero(labels == k), tol)
+    return moved
+
+
+def _absorb_shards(V, F, labels, fits: dict, tol: float, TT) -> np.ndarray:
+    """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
+    RMS within GROW_TOL x tol) join it; unexplained ones of fewer than MIN_REGION_FACES faces
+    join the nearest neighbour whatever the distance. A true small face (a chamfer two
+    triangles wide) is off its neighbours' surfaces and explained by its own: it stays."""
+    labels = labels.copy()
+    counts = np.bincount(labels)
+    for k in np.flatnonzero((counts > 0) & (counts < SHARD_FACES)).tolist():
+        faces = np.flatnonzero(labels == k)
+        nb = np.unique(labels[TT[faces][TT[faces] >= 0]])
+        nb = [j for j in nb.tolist() if j != k]
+        if not nb:
+            continue
+        d = [float(np.sqrt(np.mean(_corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
+        j = int(np.argmin(d))
+        tiny = len(faces) < MIN_REGION_FACES and not _explains(fits[k], tol)
+        if d[j] <= GROW_TOL * tol or tiny:
+            labels[faces] = nb[j]
+    return labels
+
+
+def _face_connected(F, labels, TT=None) -> np.ndarray:
+    """Split every label into its face-connected pieces; returns piece ids ``0..p-1``."""
+    TT = _adjacency(F) if TT is None else TT
+    fa = np.repeat(np.arange(len(F)), 3)
+    fb = TT.ravel()
+    keep = (fb >= 0) & (labels[np.maximum(fb, 0)] == labels[fa])
+    A = sp.csr_matrix((np.ones(int(keep.sum())), (fa[keep], fb[keep])), shape=(len(F),) * 2)
+    return connected_components(A, directed=False)[1].astype(np.int64)
+
+
+def refine_segmentation(
+    V: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    tol: float | None = None,
+    *,
+    split: bool = True,
+    progress=None,
+) -> SurfaceSegmentation:
+    """Fit a surface to every segment; split, merge and move boundaries by the fits.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+        A validated mesh.
+    labels : (m,) int64
+        Initial segmentation (e.g. the heat segmentation).
+    tol : float, optional
+        Fit tolerance (model units); default :func:`~igl_heatseg.surfaces.fit.fit_tolerance`.
+    split : bool
+        Split segments that no surface explains (step 2).
+    progress : callable(stage, fraction), optional
+
+    Returns
+    -------
+    SurfaceSegmentation
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V, F = igl.loop(*igl.icosahedron(), 3)
+    >>> V /= np.linalg.norm(V, axis=1, keepdims=True)          # a sphere tessellation
+    >>> r = refine_segmentation(V, F, (V[F].mean(axis=1)[:, 0] > 0).astype(np.int64))
+    >>> [s.kind for s in r.surfaces], r.merged                 # two halves merge into one
+    (['sphere'], 1)
+    """
+    progress = progress or (lambda stage, fraction=1.0: None)
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    t0 = time.perf_counter()
+    timings = {}
+    TT = _adjacency(F)
+    FN = face_normals(V, F)
+    labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
+    tol = fit_tolerance(V, F) if tol is None else float(tol)
+    timings["tolerance"] = time.perf_counter() - t0
+
+    t = time.perf_counter()
+    ks = np.unique(labels).tolist()
+    fits = {}
+    n_split = 0
+    nxt = max(ks) + 1
+    for i, k in enumerate(ks):
+        progress("fit", i / max(len(ks), 1))
+        faces = np.flatnonzero(labels == k)
+        s = _fit(V, F, faces, tol)
+        if split and not _explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
+            sub = grow_regions(V, F, faces, tol, FN, TT)
+            if sub.max() > 0:
+                n_split += 1
+                for r in range(int(sub.max()) + 1):
+                    part = faces[sub == r]
+                    lab = k if r == 0 else nxt
+                    nxt += r > 0
+                    labels[part] = lab
+                    fits[lab] = _fit(V, F, part, tol)
+                continue
+        fits[k] = s
+    timings["fit_split"] = time.perf_counter() - t
+
+    merged = moved = 0
+    timings["merge"] = timings["boundaries"] = 0.0
+    rejected: set = set()
+    for _ in range(ROUNDS):  # moves can make segments adjacent that a merge then joins
+        t = time.perf_counter()
+        progress("merge", 0.0)
+        m_round = _merge(V, F, labels, tol, fits, rejected)
+        timings["merge"] += time.perf_counter() - t
+        t = time.perf_counter()
+        progress("boundaries", 0.0)
+        mv_round = _move_boundary_faces(V, F, labels, fits, tol)
+        pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
+        if len(np.unique(pieces)) != len(fits):
+            labels = pieces
+            fits = {k: _fit(V, F, np.flatnonzero(labels == k), tol) for k in np.unique(labels)}
+        timings["boundaries"] += time.perf_counter() - t
+        merged += m_round
+        moved += mv_round
+        if m_round == 0 and mv_round == 0:
+            break
+    t = time.perf_counter()
+    labels = _absorb_shards(V, F, labels, fits, tol, TT)
+    timings["shards"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    area = face_areas(V, F)
+    _, inv = np.unique(labels, return_inverse=True)
+    order = np.argsort(-np.bincount(inv, weights=area), kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    labels = rank[inv].astype(np.int64)
+    surfaces = [_fit(V, F, np.flatnonzero(labels == k), tol) for k in range(len(order))]
+    timings["final_fit"] = time.perf_counter() - t
+    progress("surfaces", 1.0)
+    log.info("surfaces: %d segments (%d split, %d merges, %d faces moved), tol %.3g",
+             len(surfaces), n_split, merged, moved, tol)
+    return SurfaceSegmentation(labels, surfaces, tol, n_split, merged, moved, timings)

@@ -1,0 +1,103 @@
+"""Fit-driven refinement: merging what one surface explains, straightening boundaries."""
+
+from __future__ import annotations
+
+import json
+
+import igl
+import numpy as np
+
+from igl_heatseg.surfaces import refine_segmentation, segment_adjacency
+
+
+def capped_cylinder(facets: int = 12, rows: int = 6, r: float = 1.0, h: float = 3.0):
+    """A closed cylinder with ``facets`` facets per circle; caps fanned from a centre."""
+    t = 2 * np.pi * np.arange(facets) / facets
+    z = np.linspace(0, h, rows + 1)
+    ring = np.c_[r * np.cos(t), r * np.sin(t)]
+    V = np.vstack([np.c_[ring, np.full(facets, zz)] for zz in z] + [[[0, 0, 0]], [[0, 0, h]]])
+    F = []
+    for i in range(rows):
+        for j in range(facets):
+            a, b = i * facets + j, i * facets + (j + 1) % facets
+            c, d = a + facets, b + facets
+            F += [[a, b, d], [a, d, c]]
+    c0, c1 = len(V) - 2, len(V) - 1
+    top = rows * facets
+    for j in range(facets):
+        F.append([c0, (j + 1) % facets, j])
+        F.append([c1, top + j, top + (j + 1) % facets])
+    return V.astype(float), np.array(F, dtype=np.int64)
+
+
+def test_sphere_halves_merge():
+    V, F = igl.loop(*igl.icosahedron(), 3)
+    V /= np.linalg.norm(V, axis=1, keepdims=True)  # vertices on the unit sphere
+    r = refine_segmentation(V, F, (V[F].mean(axis=1)[:, 0] > 0).astype(np.int64))
+    assert [s.kind for s in r.surfaces] == ["sphere"] and r.merged == 1
+    assert np.isclose(r.surfaces[0].params["radius"], 1.0, rtol=1e-2)
+
+
+def test_coarse_cylinder_strips_become_one_cylinder_and_two_caps():
+    V, F = capped_cylinder(facets=12)
+    side = np.arange(len(F)) < 2 * 6 * 12
+    strip = (np.arange(len(F)) // 2) % 12  # one label per facet column on the side
+    labels = np.where(side, strip, 12 + (np.arange(len(F)) - 2 * 6 * 12) % 2)
+    r = refine_segmentation(V, F, labels)
+    kinds = sorted(s.kind for s in r.surfaces)
+    assert kinds == ["cylinder", "plane", "plane"], kinds
+    cyl = next(s for s in r.surfaces if s.kind == "cylinder")
+    assert np.isclose(cyl.params["radius"], 1.0, rtol=0.05)
+    assert abs(abs(cyl.params["axis"][2]) - 1) < 1e-6
+
+
+def test_boundary_faces_move_to_the_surface_they_lie_on():
+    V, F = capped_cylinder(facets=48, rows=8)
+    nside = 2 * 8 * 48
+    labels = np.where(np.arange(len(F)) < nside, 0, 1 + (np.arange(len(F)) - nside) % 2)
+    # a ring of side faces wrongly given to the bottom cap
+    wrong = np.arange(2 * 48)
+    labels[wrong] = 1
+    moved = refine_segmentation(V, F, labels, split=False)  # only the Lloyd moves fix it
+    assert moved.moved >= len(wrong)
+    for r in (moved, refine_segmentation(V, F, labels)):  # by default the split fixes it first
+        side_label = r.labels[nside // 2]
+        assert (r.labels[:nside] == side_label).all()
+        assert (r.labels[nside:] != side_label).all()
+        fa, fb = segment_adjacency(F, r.labels)
+        assert len(fa) == 2 * 48  # two circles of boundary edges, nothing else
+
+
+def test_labels_are_one_per_face_and_largest_first():
+    V, F = capped_cylinder()
+    r = refine_segmentation(V, F, np.zeros(len(F), dtype=np.int64))
+    assert r.labels.shape == (len(F),)
+    assert len(r.surfaces) == r.labels.max() + 1
+
+
+def test_robust_segment_writes_surfaces_and_face_types(tmp_path):
+    from igl_heatseg.cli import main
+    from igl_heatseg.surfaces import SURFACE_KINDS
+
+    V, F = capped_cylinder(facets=48, rows=8)
+    path = tmp_path / "can.obj"
+    path.write_text(
+        "".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V)
+        + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
+    )
+    assert main(["segment", str(path), "-o", str(tmp_path / "out"), "--mode", "robust"]) == 0
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    kinds = [s["type"] for s in report["surfaces"]]
+    assert len(kinds) == report["segments"] == 3
+    assert sorted(kinds) == ["cylinder", "plane", "plane"]
+    cyl = next(s for s in report["surfaces"] if s["type"] == "cylinder")
+    assert abs(cyl["radius"] - 1.0) < 1e-3 and cyl["rms"] < 1e-6
+    ply = (tmp_path / "out" / "segmented.ply").read_bytes()
+    header = ply[: ply.index(b"end_header")].decode()
+    assert "property uchar surface_type" in header
+    body = np.frombuffer(
+        ply[ply.index(b"end_header\n") + 11 + len(V) * 24 :],
+        dtype=[("n", "u1"), ("v", "<i4", (3,)), ("label", "<i4"), ("rgb", "u1", 3), ("t", "u1")],
+    )
+    labels = np.loadtxt(tmp_path / "out" / "labels.txt", dtype=np.int64)
+    assert [SURFACE_KINDS[t] for t in body["t"][:3]] == [kinds[k] for k in labels[:3]]

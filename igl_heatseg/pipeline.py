@@ -39,6 +39,7 @@ from .mesh.topology import face_components
 from .parameterization.atlas import atlas_corner_uv, pack_charts
 from .parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
 from .parameterization.cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
+from .parameterization.split import SPLIT_SD_MAX, parameterize_pieces
 from .segmentation.api import segment_with_mode
 from .segmentation.params import resolve_params
 
@@ -156,6 +157,15 @@ def _assign_paths(
     return out
 
 
+def _piece(ch: Chart, rows: np.ndarray, res: CutResult, areas: np.ndarray) -> Chart:
+    """A piece of a chart cut for distortion: a chart of its own (id set later)."""
+    faces = ch.faces[rows]
+    c = Chart(id=-1, segment=ch.segment, faces=faces, cut=res)
+    c.report = {**ch.report, "faces": int(len(faces)), "area": float(areas[faces].sum())}
+    c.report.update(split_from=ch.id, topology_after=res.topology_after.as_dict())
+    return c
+
+
 def compose_cuts(first: CutResult, second: CutResult) -> CutResult:
     """``second`` cut the output of ``first``: express it in ``first``'s input numbering.
 
@@ -197,6 +207,7 @@ def run_pipeline(
     solver: str = "fast",
     mode: str = "paper",
     hlle_skip_curvature: float | None | Literal["default"] = "default",
+    split_sd_max: float = SPLIT_SD_MAX,
 ) -> PipelineResult:
     """Segment, cut, parameterize and pack a mesh (nothing is written; see the module docstring).
 
@@ -207,10 +218,10 @@ def run_pipeline(
     theta, eps : float, optional
         Segmentation parameters; ``None`` takes the mode's defaults (paper: Table 1).
     energy : {"auto", "hlle", "curved"}
-        Hessian energy for :func:`igl_heatseg.parameterization.chart.parameterize_chart`: the paper's HLLE,
-        libigl's curved Hessian, or ``"auto"`` (default): HLLE, and the curved Hessian for
-        charts whose HLLE map is not bijective (measured: the fewest fallbacks on every
-        mesh of the shared data set).
+        Hessian energy for :func:`igl_heatseg.parameterization.chart.parameterize_chart`: the
+        paper's HLLE, libigl's curved Hessian, or ``"auto"`` (default): HLLE, and the curved
+        Hessian for charts whose HLLE map is not bijective (measured: the fewest fallbacks on
+        every mesh of the shared data set).
     cut : {"auto", "none"}
         Cut non-disk charts automatically, or only along ``cut_paths``.
     cut_paths : sequence of (int, int)
@@ -228,7 +239,13 @@ def run_pipeline(
     hlle_skip_curvature : float, None or "default"
         With ``energy="auto"``, charts whose total absolute Gaussian curvature exceeds this
         skip HLLE (recorded in each chart's ``attempts``); ``"default"``:
-        :data:`igl_heatseg.parameterization.chart.HLLE_SKIP_CURVATURE`; ``None`` always tries HLLE first.
+        :data:`igl_heatseg.parameterization.chart.HLLE_SKIP_CURVATURE`; ``None`` always tries
+        HLLE first.
+    split_sd_max : float
+        A chart whose best bijective map has a mean symmetric Dirichlet energy above this is
+        split along a seam of highest stretch and mapped again
+        (:func:`igl_heatseg.parameterization.split.parameterize_pieces`); its pieces are
+        charts of their own (``split_from``), counted in ``charts_cut_for_distortion``.
 
     Returns
     -------
@@ -292,8 +309,9 @@ def run_pipeline(
     assigned = _assign_paths(mesh, charts, cut_paths)
     t_charts = time.perf_counter() - t
 
-    # 2. cut and parameterize
+    # 2. cut and parameterize (a chart cut for distortion becomes several)
     t_cut = t_param = 0.0
+    n_split, split_into = 0, {}
     for ch in charts:
         name = f"chart {ch.id}"
         progress("cut+param", ch.id / max(len(charts), 1))
@@ -344,13 +362,18 @@ def run_pipeline(
             continue
         t = time.perf_counter()
         try:
-            p = parameterize_chart(
-                res.V,
-                res.F,
-                energy,
-                fallback=fallback,
-                hlle_skip_curvature=hlle_skip_curvature,
+            pieces = parameterize_pieces(
+                res,
+                lambda Vp, Fp, nm: parameterize_chart(
+                    Vp,
+                    Fp,
+                    energy,
+                    fallback=fallback,
+                    hlle_skip_curvature=hlle_skip_curvature,
+                    name=nm,
+                ),
                 name=name,
+                sd_max=split_sd_max,
             )
         except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
             # One chart failing must not lose the others: report it and go on.
@@ -366,19 +389,26 @@ def run_pipeline(
             )
             continue
         t_param += time.perf_counter() - t
-        ch.param = p
-        ch.report.update(
-            parameterized=True,
-            method=p.method,
-            bijective=bool(p.bijective),
-            flips=int(p.flips),
-            overlaps=int(p.overlaps),
-            fallback_used=bool(p.fallback_used),
-            distortion={k: float(v) for k, v in p.distortion.items()},
-            seconds=secs_cut + p.seconds,
-            attempts=p.attempts,
-        )
+        if len(pieces) > 1:  # cut for distortion: the chart becomes several (renumbered below)
+            n_split += 1
+            split_into[ch.id] = [_piece(ch, rows, r, areas) for rows, r, _ in pieces]
+        for c, (_, _, p) in zip(split_into.get(ch.id, [ch]), pieces, strict=True):
+            c.param = p
+            c.report.update(
+                parameterized=True,
+                method=p.method,
+                bijective=bool(p.bijective),
+                flips=int(p.flips),
+                overlaps=int(p.overlaps),
+                fallback_used=bool(p.fallback_used),
+                distortion={k: float(v) for k, v in p.distortion.items()},
+                seconds=secs_cut + p.seconds,
+                attempts=p.attempts,
+            )
     progress("cut+param", 1.0)
+    charts = [c for ch in charts for c in split_into.get(ch.id, [ch])]
+    for i, c in enumerate(charts):
+        c.id = c.report["id"] = i
 
     # 3. pack
     t = time.perf_counter()
@@ -422,6 +452,7 @@ def run_pipeline(
         "charts_bijective": int(sum(bool(ch.report.get("bijective")) for ch in charts)),
         "charts_fallback": int(sum(bool(ch.report.get("fallback_used")) for ch in charts)),
         "charts_cut": int(sum(ch.report["cut_length"] > 0 for ch in charts)),
+        "charts_cut_for_distortion": n_split,
         "energy": energy,
         "cut": cut,
         "cut_paths_input": [list(map(int, p)) for p in cut_paths],

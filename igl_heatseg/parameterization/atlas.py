@@ -19,11 +19,13 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
+from .outline_pack import OUTLINE_MAX_CHARTS, pack_outlines
 
 __all__ = [
     "PackedAtlas",
@@ -64,7 +66,8 @@ class PackedAtlas:
         Packed UVs of each chart, all in ``[0, 1]^2``.
     boxes : (k, 4) float64
         Each chart's axis-aligned bounding box in the atlas, ``[u_min, v_min, u_max, v_max]``
-        (without gutter); boxes of different charts are at least the gutter apart.
+        (without gutter); with the box packer, boxes of different charts are at least the gutter
+        apart (the outline packer keeps the charts themselves apart).
     scale : float
         Common factor from (area-normalised, if ``areas`` was given) chart units to atlas units.
     chart_scales : (k,) float64
@@ -288,6 +291,7 @@ def pack_charts(
     *,
     gutter: float = GUTTER_DEFAULT,
     rotate: bool = True,
+    packer: Literal["auto", "boxes", "outlines"] = "auto",
 ) -> PackedAtlas:
     """Pack chart UV maps into ``[0, 1]^2`` without overlaps between charts.
 
@@ -305,6 +309,12 @@ def pack_charts(
         Gap between chart boxes as a fraction of the atlas side, ``0 <= gutter < 0.5``.
     rotate : bool
         Rotate each chart to its minimum-area bounding box.
+    packer : {"auto", "boxes", "outlines"}
+        ``"boxes"``: shelf and skyline packing of the bounding boxes (boxes at least the gutter
+        apart); ``"outlines"``: the charts' own outlines on a raster
+        (:func:`~.outline_pack.pack_outlines`: charts at least the gutter apart, their boxes
+        may overlap); ``"auto"`` (default): the smaller of the two layouts (outlines only up to
+        :data:`~.outline_pack.OUTLINE_MAX_CHARTS` charts).
 
     Returns
     -------
@@ -334,6 +344,10 @@ def pack_charts(
         raise MeshError("pack_charts: no charts to pack")
     if not (0 <= gutter < 0.5):
         raise MeshError(f"pack_charts: gutter must be in [0, 0.5), got {gutter}")
+    if packer not in ("auto", "boxes", "outlines"):
+        raise MeshError(
+            f"pack_charts: packer must be 'auto', 'boxes' or 'outlines', got {packer!r}"
+        )
     k = len(uvs)
     P_list, F_list = [], []
     for i, (UV, F) in enumerate(zip(uvs, faces, strict=True)):
@@ -398,16 +412,27 @@ def pack_charts(
                 xy_o[big], t_o[big] = xy, turned
                 best = (side, xy_o[order], t_o)  # offsets in `order` space, flags not
     side, xy_sorted, turned = best
+    method = "boxes"
     xy = np.empty_like(xy_sorted)
     xy[order] = xy_sorted
-    for i in np.flatnonzero(turned):
-        # a quarter turn (still a rotation: orientation kept), back into the box's corner
-        local[i] = _rotate(local[i], np.pi / 2)
+    turns = turned.astype(np.int64)
+    if packer == "outlines" or (packer == "auto" and k <= OUTLINE_MAX_CHARTS):
+        offsets, q_turns = pack_outlines(local, F_list, gutter)
+        placed = [_rotate(local[i], q_turns[i] * np.pi / 2) for i in range(k)]
+        placed = [P - P.min(axis=0) + offsets[i] for i, P in enumerate(placed)]
+        lo = np.min([P.min(axis=0) for P in placed], axis=0)
+        side_o = float((np.max([P.max(axis=0) for P in placed], axis=0) - lo).max()) + g
+        if packer == "outlines" or side_o < side:
+            side, turns = side_o, q_turns
+            xy = np.array([P.min(axis=0) - lo for P in placed])
+            method = "outlines"
+    for i in np.flatnonzero(turns):
+        # quarter turns (still a rotation: orientation kept), back into the box's corner
+        local[i] = _rotate(local[i], turns[i] * np.pi / 2)
         local[i] -= local[i].min(axis=0)
-        rotations[i] = np.arctan2(
-            np.sin(rotations[i] + np.pi / 2), np.cos(rotations[i] + np.pi / 2)
-        )
-    # The whole layout (with a half gutter around every box) maps to [0, 1]^2.
+        t = rotations[i] + turns[i] * np.pi / 2
+        rotations[i] = np.arctan2(np.sin(t), np.cos(t))
+    # The whole layout (with a half gutter around every chart) maps to [0, 1]^2.
     scale = 1.0 / side
     out, boxes = [], np.zeros((k, 4))
     for i in range(k):
@@ -418,7 +443,9 @@ def pack_charts(
         out.append(Q)
         boxes[i] = [*Q.min(axis=0), *Q.max(axis=0)]
     fill = float((uv_area * chart_scales**2).sum() * scale**2)
-    log.info("packed %d chart(s): fill %.1f %%, gutter %.3g", k, 100 * fill, g * scale)
+    log.info(
+        "packed %d chart(s) by %s: fill %.1f %%, gutter %.3g", k, method, 100 * fill, g * scale
+    )
     return PackedAtlas(
         uvs=out,
         boxes=boxes,

@@ -82,6 +82,9 @@ LM_GIVE_UP_AFTER = 10
 #: At most this many points drive the iterations; a final polish uses all points. Beyond ~1,000
 #: well-spread samples the fitted parameters change by far less than the noise.
 LM_MAX_POINTS = 1500
+#: fit_surface's candidates first iterate on this many samples: a wrong kind is given up there,
+#: at a quarter of the cost.
+LM_COARSE_POINTS = 400
 #: Relative eigenvalue / determinant below which a seed's linear system counts as singular.
 SEED_RCOND = 1e-9
 
@@ -214,11 +217,11 @@ def _seed_sample(X, N, wn):
     return X[idx], None if N is None else N[idx], ws / max(ws.sum(), 1e-300)
 
 
-def _subsample(p: int) -> np.ndarray:
-    """Evenly strided indices of at most LM_MAX_POINTS of ``p`` points (deterministic)."""
-    if p <= LM_MAX_POINTS:
+def _subsample(p: int, most: int = LM_MAX_POINTS) -> np.ndarray:
+    """Evenly strided indices of at most ``most`` of ``p`` points (deterministic)."""
+    if p <= most:
         return np.arange(p)
-    return np.linspace(0, p - 1, LM_MAX_POINTS).astype(np.int64)
+    return np.linspace(0, p - 1, most).astype(np.int64)
 
 
 def _least_eig(M: np.ndarray):
@@ -341,7 +344,15 @@ def _curv_dist(x, n, kappa):
 
 
 def _run_lm(make_res, X, wn, x0, give_up: float = math.inf):
-    """LM on at most LM_MAX_POINTS strided samples, then a short polish on all points."""
+    """LM on at most LM_MAX_POINTS strided samples, then a short polish on all points. With a
+    give-up level, a first pass on LM_COARSE_POINTS samples drops hopeless candidates cheaply."""
+    if math.isfinite(give_up) and len(X) > 2 * LM_COARSE_POINTS:
+        idx = _subsample(len(X), LM_COARSE_POINTS)
+        ws = wn[idx]
+        sol = _lm(make_res(X[idx], np.sqrt(ws / max(ws.sum(), 1e-300))), x0, give_up=give_up)
+        if sol is None or sol[1] > give_up:
+            return sol
+        x0 = sol[0]
     idx = _subsample(len(X))
     if len(idx) == len(X):
         return _lm(make_res(X, np.sqrt(wn)), x0, give_up=give_up)
@@ -491,7 +502,7 @@ def _sphere_res(n0):
                 return sw * _curv_dist(x, n, t[3])
             D, Gx, Gn, Gk = _curv_dist_d(x, n, t[3])
             Gt = Gn - t[2] * Gx  # total derivative in n (x moves with n)
-            J = np.c_[Gt @ dn[0], Gt @ dn[1], -(Gx @ n), Gk]
+            J = np.stack([Gt @ dn[0], Gt @ dn[1], -(Gx @ n), Gk], axis=1)
             return sw * D, J * sw[:, None]
         return res
 
@@ -724,8 +735,8 @@ def _cone_res(a0):
             U = Rv / np.maximum(r, 1e-300)[:, None]
             gx = cp * U - sp * a  # d(d)/dx
             ga = -cp * h[:, None] * U - sp * x  # d(d)/da (dr/da = -h U)
-            J = np.c_[ga @ da[0], ga @ da[1], -(gx @ u0), -(gx @ v0), np.full(len(d), -cp),
-                      -(r - t[4]) * sp - h * cp]
+            J = np.stack([ga @ da[0], ga @ da[1], -(gx @ u0), -(gx @ v0),
+                          np.full(len(d), -cp), -(r - t[4]) * sp - h * cp], axis=1)
             return sw * d, J * sw[:, None]
         return res
 
@@ -912,9 +923,9 @@ def _torus_res(a0, C0, R0):
             dmv = -math.sin(t[4]) * u0 + math.cos(t[4]) * t0
             du = [Pu @ (-(mv @ d) * a - (mv @ a) * d) / L for d in da]
             du.append(Pu @ (dmv - (dmv @ a) * a) / L)
-            J = np.c_[ga @ da[0] + t[5] * (gx @ du[0]), ga @ da[1] + t[5] * (gx @ du[1]),
-                      -(gx @ u0), -(gx @ a0), t[5] * (gx @ du[2]), gx @ u - g0,
-                      np.full(len(e), -1.0)]
+            J = np.stack([ga @ da[0] + t[5] * (gx @ du[0]), ga @ da[1] + t[5] * (gx @ du[1]),
+                          -(gx @ u0), -(gx @ a0), t[5] * (gx @ du[2]), gx @ u - g0,
+                          np.full(len(e), -1.0)], axis=1)
             return sw * (e - t[6]), J * sw[:, None]
         return res
 

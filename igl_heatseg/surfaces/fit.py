@@ -758,10 +758,12 @@ def _revolution_axis(X, N, wn):
 def fit_torus(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | None:
     """Geometric least-squares torus.
 
-    Seed: the axis is the line meeting all normal lines (each normal line of a surface of
+    Seeds: the axis is the line meeting all normal lines (each normal line of a surface of
     revolution meets its axis), the tube circle is where the normal lines meet in the
-    (radius, height) half-plane. Then Levenberg-Marquardt on
-    ``hypot(r - major, h - h0) - minor``.
+    (radius, height) half-plane; or the tube centres ``p - r n`` for the minor radius ``r``
+    that makes them coplanar (robust to noisy normals on fillets). The better seed is refined
+    by Levenberg-Marquardt on ``hypot(r - major, h) - minor``, the torus parameterised about
+    its spine point nearest the data (turning the axis turns it about the data).
 
     Parameters
     ----------

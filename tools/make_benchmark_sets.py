@@ -58,7 +58,7 @@ TUNING_SEED0, VALIDATION_SEED0 = 1000, 2000
 TESSELLATIONS = ("frontal", "irregular", "coarse")
 NOISE_LEVELS = (0.0, 0.05, 0.1, 0.2)
 
-#: Parts per set by default (about a minute per set on two shared cores).
+#: Parts per set by default (75 s of CPU per set; 4 minutes wall on two busy shared cores).
 PER_SET_DEFAULT = 40
 
 #: Range of gmsh target triangle counts (log-uniform); coarse CAD tessellations ignore it.

@@ -323,8 +323,10 @@ def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
             a = queue.pop(0)
             if a in done:
                 continue
-            done[a] = _plan_circles(a, surfaces[a], plans[a], graph, circles, pos, vertices,
-                                    ctx)
+            done[a], planned = _plan_circles(a, surfaces[a], plans[a], graph, circles, pos,
+                                             vertices, ctx)
+            if not planned:
+                plans[a] = None
             for loop in graph.loops[a]:
                 ch = graph.chains[loop[0][0]]
                 queue.extend(b for b in (ch.left, ch.right) if b in plans and b not in done)
@@ -335,20 +337,21 @@ def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
 
 def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
     """Seam start u0 of one face around its axis, starting its closed edges there (exact
-    circles when planned); None when a neighbour's circle is too far from this face's own
-    (then the face is trimmed by ShapeFix_Face with its seam away from the vertices)."""
+    circles when it stays planned), and whether it stays planned; u0 is None when the face
+    has no common seam with its neighbours (then ShapeFix_Face puts the seam away from the
+    vertices)."""
     tol = REVOLVED_SEW_FRACTION * ctx["sew_tol"]
     cids = [lp[0][0] for lp in graph.loops[a]]
-    if plan is not None and any(circles.get(c) is not None and
-                                _circle_gap(circles[c][0], s, lv, ctx) > tol
+    if plan is not None and any(c in circles and (circles[c] is None or
+                                                  _circle_gap(circles[c][0], s, lv, ctx) > tol)
                                 for c, lv in zip(cids, plan["levels"], strict=True)):
-        plan = None
+        plan = None  # a neighbour's edge is no circle of this face: trim by ShapeFix
     given = [c for c in cids if c in circles]
     u0 = 0.0
     if given:
         u0 = float(periodic.surface_uv(s, pos[int(graph.chains[given[0]].verts[0])][None])[0][0])
     if len(given) > 1 and plan is None:
-        return None  # both ends fixed by neighbours: no common seam
+        return None, False  # both ends fixed by neighbours: no common seam
     levels = plan["levels"] if plan is not None else [None] * len(cids)
     for c, level in zip(cids, levels, strict=True):
         if c in circles:
@@ -359,13 +362,12 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
         else:
             P = geometry.start_at_seam(ctx["chain_points"][c], periodic.seam_at(s, u0))
             if P is None:
-                return None
+                return None, False
             ctx["chain_points"][c], start, circles[c] = P, P[0], None
         _move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
     if plan is not None:
         plan["u0"] = u0
-        return u0
-    return u0
+    return u0, plan is not None
 
 
 def _loop_points(loops, ctx):

@@ -254,6 +254,23 @@ def test_fit_surface_freeform_bump():
     assert s.to_dict()["type"] == "freeform"
 
 
+def test_fit_surface_rejects_surfaces_the_normals_contradict():
+    """Points on a cylinder whose normals run along its axis (a stack of flat rings): no kind
+    fits both, whatever the distances."""
+    from igl_heatseg.surfaces import fit as F
+
+    rng = np.random.default_rng(4)
+    P, N_true = cylinder_patch(rng, 1.0, 2 * np.pi, 2.0)
+    N = np.tile([0.0, 0.0, 1.0], (len(P), 1))
+    s = fit_cylinder(P, N_true)
+    assert s.rms < 1e-9  # the distances alone are perfect
+    w = np.full(len(P), 1.0 / len(P))
+    assert F._normal_agreement(s, P, N, w) < 1e-9
+    assert F._normal_agreement(s, P, N_true, w) == pytest.approx(1.0)
+    assert fit_surface(P, N, tol=1e-3).kind == "freeform"
+    assert fit_surface(P, N_true, tol=1e-3).kind == "cylinder"
+
+
 def test_fit_surface_single_kind_and_errors():
     rng = np.random.default_rng(0)
     P, N = cylinder_patch(rng, 1.0, np.pi, 1.0)

@@ -102,6 +102,12 @@ BEAT_ABS = 0.25
 #: thousands of Gaussian residuals is ~4 sigma; a bump or a wrong kind shows up in max_dev).
 MAX_DEV_FACTOR = 3.0
 
+#: fit_surface: a candidate whose normals agree with the data's less than this (weighted mean
+#: |cos| of the angle; 0.8 ~ 37 degrees on average, far beyond the face-normal noise of a scan
+#: fitted within tolerance) is rejected whatever its distances: a fan cap and a cylinder ring
+#: lie close to a torus by position alone.
+NORMAL_AGREEMENT = 0.8
+
 #: fit_tolerance: multiple of the noise level (rms of vertex noise; a fit's rms over vertices and
 #: face centroids is ~0.8 of it, so 2.5 leaves room for the noise estimate's own error).
 K_NOISE = 2.5
@@ -1032,7 +1038,9 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
     simpler kind it does not clearly beat, whose rms is then below BEAT_FACTOR * tol); when
     none is within tolerance the result is ``freeform`` (with the best candidate's rms and
     max_dev, or nan). Candidates still above GIVE_UP_FACTOR * tol after LM_GIVE_UP_AFTER
-    iterations stop refining once they creep (a wrong kind; its rms only ranks it).
+    iterations stop refining once they creep (a wrong kind; its rms only ranks it). A candidate
+    whose normals disagree with ``N`` (weighted mean ``|cos|`` below NORMAL_AGREEMENT) is
+    dropped, however close the points.
 
     Parameters
     ----------
@@ -1081,7 +1089,7 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
     for kind in (k for k in SURFACE_KINDS[:-1] if k in kinds):
         kw = {} if kind == "plane" else {"give_up_rms": GIVE_UP_FACTOR * tol}
         s = _FITTERS[kind](P, N, wn, **kw)
-        if s is None:
+        if s is None or _normal_agreement(s, P, N, wn) < NORMAL_AGREEMENT:
             continue
         best = s if best is None or s.rms < best.rms else best
         if chosen is None or _clearly_better(s, chosen, tol):
@@ -1092,6 +1100,14 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
             return _with_area(chosen, w)
     rms, dev = (best.rms, best.max_dev) if best is not None else (math.nan, math.nan)
     return Surface("freeform", {"centroid": m}, rms=rms, max_dev=dev, area=_area(w))
+
+
+def _normal_agreement(s: Surface, P, N, wn) -> float:
+    """Weighted mean ``|N . n|`` of the data normals and the surface's normals (on the strided
+    subsample): 1 when they agree, whatever the orientation."""
+    idx = _subsample(len(P))
+    return float(wn[idx] @ np.abs(np.einsum("ij,ij->i", N[idx], s.normals(P[idx])))
+                 / max(wn[idx].sum(), 1e-300))
 
 
 def _with_area(s: Surface, w) -> Surface:

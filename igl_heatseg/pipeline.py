@@ -364,12 +364,13 @@ def run_pipeline(
         try:
             pieces = parameterize_pieces(
                 res,
-                lambda Vp, Fp, nm: parameterize_chart(
+                lambda Vp, Fp, nm, start: parameterize_chart(
                     Vp,
                     Fp,
                     energy,
                     fallback=fallback,
                     hlle_skip_curvature=hlle_skip_curvature,
+                    start_uv=start,
                     name=nm,
                 ),
                 name=name,

@@ -62,7 +62,7 @@ def random_charts(k, seed):
 @pytest.mark.parametrize("k", [1, 2, 7, 40])
 def test_packing_no_overlap_in_unit_square(k, seed):
     uvs, faces = random_charts(k, seed)
-    atlas = pack_charts(uvs, faces)
+    atlas = pack_charts(uvs, faces, packer="boxes")
     assert len(atlas.uvs) == k
     for Q in atlas.uvs:
         assert Q.min() >= 0.0 and Q.max() <= 1.0
@@ -283,3 +283,65 @@ def test_atlas_obj_rejects_bad_corner_uv(tmp_path):
     C[3, 1, 0] = np.nan
     with pytest.raises(MeshError, match="not finite on 1 face"):
         write_atlas_obj(tmp_path / "a.obj", V, F, C)
+
+
+def l_chart(n=6, size=1.0):
+    """An L-shaped grid chart (three unit squares' worth of cells), as (UV, F)."""
+    P, F = grid_chart(2 * n, 2 * n, 2 * size, 2 * size)
+    c = (P[F].mean(axis=1) < size).any(axis=1)  # drop the upper-right quarter
+    F = F[c]
+    used = np.unique(F)
+    remap = np.full(len(P), -1)
+    remap[used] = np.arange(len(used))
+    return P[used], remap[F]
+
+
+def charts_overlap(uvs, faces):
+    """Whether any two packed charts overlap: boundary crossings, or one inside another."""
+    from matplotlib.path import Path
+
+    from igl_heatseg.mesh.topology import boundary_loops
+    from igl_heatseg.parameterization.bijectivity import boundary_self_intersections
+
+    loops = [boundary_loops(F)[0] for F in faces]
+    P = np.concatenate(uvs)
+    off = np.cumsum([0] + [len(U) for U in uvs])
+    E = np.concatenate([np.c_[lp, np.roll(lp, -1)] + o for lp, o in zip(loops, off, strict=False)])
+    pairs, _ = boundary_self_intersections(P, E)
+    chart = np.searchsorted(off, E[:, 0], side="right") - 1
+    if (chart[pairs[:, 0]] != chart[pairs[:, 1]]).any():
+        return True
+    for i, (U, lp) in enumerate(zip(uvs, loops, strict=True)):
+        for j, W in enumerate(uvs):
+            if i != j and Path(U[lp]).contains_points(W.mean(axis=0, keepdims=True))[0]:
+                return True
+    return False
+
+
+@pytest.mark.parametrize("k", [2, 5, 12])
+def test_outline_packing_nests_charts_without_overlap(k):
+    rng = np.random.default_rng(k)
+    uvs, faces = [], []
+    for _ in range(k):
+        P, F = l_chart(size=rng.uniform(0.3, 1.0))
+        t = rng.uniform(-np.pi, np.pi)
+        uvs.append(P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]]))
+        faces.append(F)
+    boxes = pack_charts(uvs, faces, packer="boxes")
+    atlas = pack_charts(uvs, faces, packer="outlines")
+    assert not charts_overlap(atlas.uvs, faces)
+    for Q, F, U in zip(atlas.uvs, faces, uvs, strict=True):
+        assert Q.min() >= 0.0 and Q.max() <= 1.0
+        assert (signed_areas(Q, F) > 0).all() == (signed_areas(U, F) > 0).all()  # rigid
+    assert atlas.fill > boxes.fill
+    assert pack_charts(uvs, faces).fill == max(atlas.fill, boxes.fill)  # "auto"
+
+
+def test_outline_packing_keeps_the_gutter():
+    uvs, faces = zip(*[l_chart() for _ in range(4)], strict=True)
+    atlas = pack_charts(list(uvs), list(faces), packer="outlines", gutter=0.02)
+    # vertices of different charts are at least the gutter apart
+    for i in range(4):
+        for j in range(i + 1, 4):
+            d = np.linalg.norm(atlas.uvs[i][:, None] - atlas.uvs[j][None], axis=2).min()
+            assert d >= 0.02 * (1 - 1e-9)

@@ -432,3 +432,64 @@ def test_fandisk_charts_are_all_bijective(fandisk):
         assert res.bijective, (c, res.attempts)
         n_fallback += res.fallback_used
     assert n_fallback < k  # most charts keep their Hessian map
+
+
+def test_quality_choice_keeps_the_lowest_energy_bijective_map():
+    """A deep spherical cap: the Hessian map is bijective but stretched; SLIM from it (or
+    Tutte + SLIM) is kept when it is lower by more than the margin, and scaled to true area."""
+    from igl_heatseg.parameterization.chart import HESSIAN_MARGIN
+
+    V, F = sphere_cap(1.6, nr=10, nt=28)
+    first = parameterize_chart(V, F, "curved", choose="first")
+    best = parameterize_chart(V, F, "curved")
+    assert best.bijective
+    energies = [
+        a["sym_dirichlet"] for a in best.attempts if a.get("bijective") and "sym_dirichlet" in a
+    ]
+    assert best.distortion["sym_dirichlet"] == pytest.approx(min(energies), rel=1e-9) or (
+        best.method.startswith("hessian-")
+        and best.distortion["sym_dirichlet"] <= HESSIAN_MARGIN * min(energies)
+    )
+    assert best.distortion["sym_dirichlet"] <= first.distortion["sym_dirichlet"] + 1e-12
+    a3 = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    d1, d2 = best.UV[F[:, 1]] - best.UV[F[:, 0]], best.UV[F[:, 2]] - best.UV[F[:, 0]]
+    auv = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+    assert auv.sum() == pytest.approx(a3.sum(), rel=1e-9)  # true scale
+
+
+def test_near_isometric_hessian_map_is_kept_without_alternatives():
+    V, F = grid(6, 5, jitter=0.2)
+    res = parameterize_chart(V, F)
+    assert res.method == "hessian-hlle"
+    assert [a["method"] for a in res.attempts] == ["hessian-hlle"]
+
+
+def test_start_map_is_a_candidate():
+    V, F = sphere_cap(1.6, nr=10, nt=28)
+    ref = parameterize_chart(V, F, "curved")
+    res = parameterize_chart(V, F, "curved", start_uv=ref.UV)
+    assert any(a["method"] == "start" and a["bijective"] for a in res.attempts)
+    assert res.distortion["sym_dirichlet"] <= ref.distortion["sym_dirichlet"] * (1 + 1e-9)
+
+
+def test_split_for_distortion_lowers_the_energy_of_a_strongly_curved_chart():
+    from igl_heatseg.parameterization.cut import cut_to_disk
+    from igl_heatseg.parameterization.split import parameterize_pieces, split_for_distortion
+
+    V, F = sphere_cap(2.6, nr=14, nt=32)  # most of a sphere
+    res = cut_to_disk(V, F)
+
+    def param(Vp, Fp, name, start):
+        return parameterize_chart(Vp, Fp, "curved", start_uv=start, name=name)
+
+    whole = param(res.V, res.F, "c", None)
+    pieces = split_for_distortion(res.V, res.F, whole.UV)
+    assert pieces is not None and len(pieces) == 2
+    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(res.F)))
+    out = parameterize_pieces(res, param, sd_max=4.5)
+    assert len(out) >= 2 and all(q.bijective for _, _, q in out)
+    rows = np.sort(np.concatenate([r for r, _, _ in out]))
+    assert np.array_equal(rows, np.arange(len(res.F)))
+    area = np.array([len(r) for r, _, _ in out], dtype=float)
+    mean = sum(q.distortion["sym_dirichlet"] * a for (_, _, q), a in zip(out, area, strict=True))
+    assert mean / area.sum() < whole.distortion["sym_dirichlet"]

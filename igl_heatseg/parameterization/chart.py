@@ -193,6 +193,7 @@ class _State:
     total_abs_curvature: float | None = None
     skip_hlle: bool = False
     candidates: list = field(default_factory=list)  # every certified map, for the choice
+    start_uv: np.ndarray | None = None  # a given bijective map to start from (compact rows)
 
     def offer(self, cand: Candidate) -> Candidate:
         """Measure a candidate's symmetric Dirichlet energy and keep it for the choice."""
@@ -455,6 +456,30 @@ def _tutte_slim_candidate_attempt(iterations: int) -> Attempt:
     return Attempt("tutte+slim-candidate", applies, run)
 
 
+def _start_attempt(iterations: int) -> Attempt:
+    """Quality candidates from a given map (e.g. the parent chart's map restricted to a piece
+    cut for distortion): the map itself and SLIM started from it."""
+
+    def run(st: _State) -> dict:
+        c = st.chart
+        UV0, cert0 = certify_oriented(st.start_uv, c.V, c.F, st.name, [c.boundary])
+        record = {"method": "start", **cert0.summary()}
+        if not cert0.bijective:
+            return record
+        lam = st.current.eigenvalues if st.current is not None else None
+        record["sym_dirichlet"] = st.offer(Candidate(UV0, cert0, "start", lam)).sym_dirichlet
+        if iterations > 0 and record["sym_dirichlet"] > QUALITY_TRY_ABOVE:
+            UV, cert, acc, good = slim_guarded(
+                c.V, c.F, UV0, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+            )
+            if acc > 0:
+                cand = st.offer(Candidate(UV, cert, "start+slim", lam))
+                record["slim_sym_dirichlet"] = cand.sym_dirichlet
+        return record
+
+    return Attempt("start", lambda st: st.start_uv is not None, run)
+
+
 def _choose(st: _State) -> None:
     """Quality choice among the certified bijective candidates: the lowest symmetric Dirichlet
     energy, unless the Hessian map (the paper's) is within :data:`HESSIAN_MARGIN` of it."""
@@ -493,7 +518,7 @@ def attempt_plan(
     --------
     >>> [a.method for a in attempt_plan("auto")]  # doctest: +NORMALIZE_WHITESPACE
     ['curvature-test', 'hessian-hlle', 'hessian-curved', 'repair', 'tutte', 'tutte+slim',
-     'tutte+slim-fixed', 'hessian+slim', 'tutte+slim-candidate']
+     'tutte+slim-fixed', 'hessian+slim', 'tutte+slim-candidate', 'start']
     >>> [a.method for a in attempt_plan("curved", "none", choose="first")]
     ['hessian-curved']
     """
@@ -513,6 +538,7 @@ def attempt_plan(
         plan += [
             _hessian_slim_attempt(slim_iterations),
             _tutte_slim_candidate_attempt(slim_iterations),
+            _start_attempt(slim_iterations),
         ]
     return plan
 
@@ -527,6 +553,7 @@ def parameterize_chart(
     repair: bool = True,
     hlle_skip_curvature: float | None = HLLE_SKIP_CURVATURE,
     choose: Literal["quality", "first"] = "quality",
+    start_uv: ArrayLike | None = None,
     name: str = "chart",
     **energy_kwargs,
 ) -> ChartParam:
@@ -570,6 +597,10 @@ def parameterize_chart(
         Hessian map is within :data:`HESSIAN_MARGIN` of it; every map is scaled to the
         chart's true size (UV area = 3D area).  ``"first"``: the first bijective map of the
         attempt order (the Hessian map's own Gram-corrected scale; Tutte scaled to the area).
+    start_uv : (n, 2) array_like of float, optional
+        ``choose="quality"`` only: a map of the same chart (rows of ``V``) offered as one more
+        candidate (``"start"``), and SLIM started from it (``"start+slim"``), when it is
+        bijective, e.g. a parent chart's map restricted to a piece cut for distortion.
     name : str
         Chart name for messages.
     **energy_kwargs
@@ -619,6 +650,8 @@ def parameterize_chart(
     with limit_blas_threads(BLAS_THREADS):
         t0 = time.perf_counter()
         st = _State(prepare_chart(V, F, name), name, energy_kwargs)
+        if start_uv is not None and choose == "quality":
+            st.start_uv = np.asarray(start_uv, dtype=np.float64)[st.chart.used] * st.chart.scale
         _run_plan(st, plan, fallback)
         if choose == "quality":
             _choose(st)

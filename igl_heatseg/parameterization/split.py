@@ -6,8 +6,9 @@ through its region of highest stretch, and each piece is mapped again (recursive
 :data:`SPLIT_MAX_DEPTH` levels):
 
 1. per-vertex stretch: the area-weighted mean of the per-triangle symmetric Dirichlet energy
-   of the map (:func:`~.distortion.face_sym_dirichlet`); the seam goes through the interior
-   vertex ``v*`` of highest stretch;
+   of the map (:func:`~.distortion.face_sym_dirichlet`); the seam goes through the vertex
+   ``v*`` of highest stretch among those at least :data:`SPLIT_CORE` of the largest distance
+   from the boundary (so that neither piece is a sliver);
 2. two shortest paths from ``v*`` to the boundary (Dijkstra over interior vertices, edge
    length divided by the stretch of the edge's triangles, so that paths follow high stretch,
    as the automatic disk cutting of :mod:`~.cut` follows short paths): the second avoids the
@@ -45,7 +46,15 @@ log = logging.getLogger(__name__)
 SPLIT_SD_MAX: float = 5.0
 
 #: Recursion depth of the splitting (a chart becomes at most ``2 ** depth`` pieces).
-SPLIT_MAX_DEPTH: int = 3
+SPLIT_MAX_DEPTH: int = 4
+
+#: A split is kept when the pieces' area-weighted mean energy is below this fraction of the
+#: whole chart's.
+SPLIT_MIN_GAIN: float = 0.98
+
+#: The seam goes through the vertex of highest stretch among those at least this fraction of
+#: the largest distance from the boundary.
+SPLIT_CORE: float = 0.3
 
 #: Pieces smaller than this (faces) are not split again, and a split leaving one is refused.
 SPLIT_MIN_FACES: int = 20
@@ -69,9 +78,15 @@ def _seam(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> np.ndarray | None:
     inner = np.flatnonzero(~on_bnd)
     if len(inner) == 0:
         return None
-    vstar = int(inner[np.argmax(vsd[inner])])
     topo = edge_topology(F)
     E = topo.E
+    # v*: highest stretch among the vertices at least SPLIT_CORE of the largest distance from
+    # the boundary (a seam through a vertex next to the boundary would cut off a sliver)
+    L = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    G = sp.csr_matrix((L, (E[:, 0], E[:, 1])), shape=(n, n))
+    depth = sp_dijkstra(G, directed=False, indices=bnd, min_only=True)
+    core = inner[depth[inner] >= SPLIT_CORE * depth[inner].max()]
+    vstar = int(core[np.argmax(vsd[core])])
     # an edge between two boundary vertices is never on the seam; boundary vertices are sinks
     keep = ~(on_bnd[E[:, 0]] & on_bnd[E[:, 1]])
     E = E[keep]
@@ -225,6 +240,7 @@ def parameterize_pieces(
     name: str = "chart",
     sd_max: float = SPLIT_SD_MAX,
     max_depth: int = SPLIT_MAX_DEPTH,
+    start: np.ndarray | None = None,
 ) -> list:
     """Map a cut chart; split it (recursively) while its best map is above ``sd_max``.
 
@@ -232,20 +248,24 @@ def parameterize_pieces(
     ----------
     res : CutResult
         A disk chart.
-    param : callable(V, F, name) -> ChartParam
-        The chart map (e.g. :func:`~.chart.parameterize_chart` with the pipeline's options).
+    param : callable(V, F, name, start) -> ChartParam
+        The chart map (e.g. :func:`~.chart.parameterize_chart` with the pipeline's options);
+        ``start`` is ``None`` or a bijective map of the piece (its parent's, restricted) to
+        pass as ``start_uv``.
     name : str
         Chart name for messages.
     sd_max : float
         Distortion bound (area-weighted mean symmetric Dirichlet energy of a piece's map).
     max_depth : int
         Splitting levels.
+    start : (n, 2) float64, optional
+        A bijective map of ``res`` to start from (passed to ``param``).
 
     Returns
     -------
     list of (faces, CutResult, ChartParam)
         ``faces`` are rows of ``res.F``; one entry (``res`` itself) when no split was made or
-        the split did not lower the worst energy.
+        the split did not lower the energy (area-weighted mean over the pieces).
 
     Examples
     --------
@@ -254,11 +274,13 @@ def parameterize_pieces(
     >>> from igl_heatseg.parameterization.cut import cut_to_disk
     >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     >>> res = cut_to_disk(V, np.array([[0, 1, 2], [0, 2, 3]]))
-    >>> out = parameterize_pieces(res, lambda V, F, nm: parameterize_chart(V, F, name=nm))
+    >>> def param(V, F, name, start):
+    ...     return parameterize_chart(V, F, name=name, start_uv=start)
+    >>> out = parameterize_pieces(res, param)
     >>> len(out), out[0][2].bijective
     (1, True)
     """
-    p = param(res.V, res.F, name)
+    p = param(res.V, res.F, name, start)
     whole = [(np.arange(len(res.F)), res, p)]
     sd = p.distortion.get("sym_dirichlet", np.inf)
     if not p.bijective or sd <= sd_max or max_depth <= 0 or len(res.F) < 2 * SPLIT_MIN_FACES:
@@ -270,11 +292,31 @@ def parameterize_pieces(
     out = []
     for k, faces in enumerate(pieces):
         sub = restrict_cut(res, faces)
-        for rows, r, q in parameterize_pieces(sub, param, f"{name}.{k}", sd_max, max_depth - 1):
+        uv = p.UV[np.unique(res.F[faces])]  # the parent's map, restricted: a candidate
+        for rows, r, q in parameterize_pieces(
+            sub, param, f"{name}.{k}", sd_max, max_depth - 1, start=uv
+        ):
             out.append((faces[rows], r, q))
-    worst = max(q.distortion.get("sym_dirichlet", np.inf) for _, _, q in out)
-    if not all(q.bijective for _, _, q in out) or worst >= sd:
-        log.info("%s: split did not help (worst %.3g vs %.3g); kept whole", name, worst, sd)
+    sds = np.array([q.distortion.get("sym_dirichlet", np.inf) for _, _, q in out])
+    a3 = np.array([_area(r) for _, r, _ in out])
+    mean = float((sds * a3).sum() / a3.sum())
+    if not all(q.bijective for _, _, q in out) or not mean < SPLIT_MIN_GAIN * sd:
+        log.info("%s: split did not help (%.3g vs %.3g); kept whole", name, mean, sd)
         return whole
-    log.info("%s: split for distortion into %d pieces (%.3g -> %.3g)", name, len(out), sd, worst)
+    log.info(
+        "%s: split for distortion into %d pieces (%.3g -> mean %.3g, worst %.3g)",
+        name,
+        len(out),
+        sd,
+        mean,
+        sds.max(),
+    )
     return out
+
+
+def _area(res: CutResult) -> float:
+    V, F = res.V, res.F
+    return float(
+        0.5
+        * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
+    )

@@ -414,7 +414,7 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
             w.Closed(True)
             builder.Add(face, w)
         fix = ShapeFix_Face(face)
-        fix.SetPrecision(ctx["vertex_tol"])
+        fix.SetPrecision(ctx["curve_tol"])  # our edges are exact to it; finer splits slivers
         fix.SetMaxTolerance(ctx["sew_tol"])
         fix.Perform()
         face = fix.Face()

@@ -1229,7 +1229,9 @@ def noise_level(V, F) -> float:
     vertices (robust to creases and corners, which are a minority). The 1-ring is small enough
     that a quadric reproduces a coarsely tessellated cylinder or sphere (its vertices lie on
     the surface; the facets' chord error is not noise), yet has residual freedom everywhere but
-    at low-valence vertices, which are skipped.
+    at low-valence vertices, which are skipped. Where the curvature varies (tori, freeform) a
+    clean tessellation still leaves an O(h^3) cubic misfit: about 1 % of the edge length on a
+    torus gridded at 15 degrees (0.4 of its chord error), 6 % at 36 degrees.
 
     Parameters
     ----------

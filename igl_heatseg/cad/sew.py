@@ -17,7 +17,7 @@ from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
 from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
 from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
 
 from .fidelity import count_free_edges, faces_of  # noqa: E402
 
@@ -42,6 +42,15 @@ def _shell_of(faces):
         builder.Add(shell, f)
     shell.Closed(count_free_edges(shell) == 0)
     return shell
+
+
+def _compound(shapes):
+    comp = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(comp)
+    for sh in shapes:
+        builder.Add(comp, sh)
+    return comp
 
 
 def _unify(shape):
@@ -88,7 +97,8 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
     Returns
     -------
     shape : TopoDS_Shape
-        A solid, a shell, or the sewn compound.
+        A solid (a compound of solids for several closed shells), a shell, or the sewn
+        compound.
     info : dict
         ``free_edges_after_sewing``, ``solid`` (bool).
     """
@@ -108,11 +118,11 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
     shells = _shells(shape)
     if not shells:  # sewing one face returns the face
         shells = [_shell_of(faces_of(shape))]
-    if closed and len(shells) == 1 and info["free_edges_after_sewing"] == 0:
-        solid = _solid(shells[0])
-        if solid is not None and BRepCheck_Analyzer(solid).IsValid():
+    if closed and info["free_edges_after_sewing"] == 0:
+        solids = [_solid(sh) for sh in shells]  # several shells: one solid per component
+        if all(so is not None and BRepCheck_Analyzer(so).IsValid() for so in solids):
             info["solid"] = True
-            return solid, info
+            return (solids[0] if len(solids) == 1 else _compound(solids)), info
         logger.warning("closed shell did not make a valid solid; returning the shell")
     if len(shells) == 1:
         return shells[0], info

@@ -101,6 +101,18 @@ def plane_fit(P):
     return c, np.linalg.svd(P - c)[2][2]
 
 
+def _face_normal_z(face) -> float:
+    """z of the outward normal of a face at the middle of its parameter range."""
+    from OCP.BRepGProp import BRepGProp_Face
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    props = BRepGProp_Face(face)
+    u0, u1, v0, v1 = props.Bounds()
+    p, n = gp_Pnt(), gp_Vec()
+    props.Normal(0.5 * (u0 + u1), 0.5 * (v0 + v1), p, n)
+    return n.Z()
+
+
 def face_types(shape):
     return sorted(BRepAdaptor_Surface(f).GetType().name for f in faces_of(shape))
 
@@ -214,9 +226,12 @@ def test_freeform_height_field_one_bspline_face():
     assert fid["hausdorff"] < 2 * tol
     assert fid["free_edges"] > 0  # an open patch
     # with a given chart (the xy coordinates) instead of the computed one
-    uv = [(np.arange(len(V)), V[:, :2].copy())]
-    res = build_brep(V, F, np.zeros(len(F), np.int64), surfs, uv=uv, tol=tol)
-    assert res.faces[0]["status"] == "built" and res.fidelity["hausdorff"] < 2 * tol
+    for chart in (V[:, :2], V[:, 1::-1]):  # counter-clockwise and mirrored
+        uv = [(np.arange(len(V)), chart.copy())]
+        res = build_brep(V, F, np.zeros(len(F), np.int64), surfs, uv=uv, tol=tol)
+        assert res.faces[0]["status"] == "built" and res.fidelity["hausdorff"] < 2 * tol
+        face = faces_of(res.shape)[0]
+        assert _face_normal_z(face) > 0  # the mesh normals point up (+z)
 
 
 def test_noisy_cube_still_closes():

@@ -184,6 +184,9 @@ def _surface_for(a, s, V, F, faces, uv, tol):
             return None, None, math.nan, "given chart does not cover the segment's vertices"
         UV = np.zeros((len(verts), 2))
         UV[np.searchsorted(verts, ids)] = np.asarray(UVg, dtype=np.float64)
+        UV = freeform.orient_chart(UV, Fl)  # mirrored if clockwise: normals follow the mesh
+        if UV is None:
+            return None, None, math.nan, "given chart folds (triangles of both orientations)"
     else:
         UV = freeform.disk_chart(V[verts], Fl)
         if UV is None:

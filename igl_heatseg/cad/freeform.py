@@ -32,7 +32,7 @@ from .geometry import DEG_MIN  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["disk_chart", "freeform_surface"]
+__all__ = ["disk_chart", "orient_chart", "freeform_surface"]
 
 #: Highest degree of a freeform patch: cubic; higher degrees let the approximation meet its
 #: tolerance at the grid points while oscillating between them (measured: errors of 3 units
@@ -77,9 +77,9 @@ def disk_chart(V: np.ndarray, F: np.ndarray):
     far = bnd[int(np.argmax(np.linalg.norm(V[bnd] - V[bnd[0]], axis=1)))]
     scale = float(np.linalg.norm(V[far] - V[bnd[0]]))
     UV, _ = igl.lscm(V, F, np.array([bnd[0], far]), np.array([[0.0, 0.0], [scale, 0.0]]))
-    UV = _orient(_align(UV), F)
+    UV = orient_chart(_align(UV), F)
     if UV is None:  # LSCM folded: Tutte-like harmonic map onto the disk is bijective
-        UV = _orient(igl.harmonic(V, F, bnd, igl.map_vertices_to_circle(V, bnd), 1), F)
+        UV = orient_chart(igl.harmonic(V, F, bnd, igl.map_vertices_to_circle(V, bnd), 1), F)
     return UV
 
 
@@ -99,8 +99,28 @@ def _align(UV: np.ndarray) -> np.ndarray:
     return best
 
 
-def _orient(UV, F):
-    """UV with positive triangle areas (mirrored if all negative), or None when folded."""
+def orient_chart(UV: np.ndarray, F: np.ndarray):
+    """A chart with positive triangle areas, so that ``Su x Sv`` follows the mesh normals.
+
+    Parameters
+    ----------
+    UV : (p, 2) float64
+    F : (q, 3) int64
+        The segment's triangles in compact vertex indices.
+
+    Returns
+    -------
+    (p, 2) float64 or None
+        ``UV``, mirrored in u when every triangle is clockwise; None when the chart folds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> orient_chart(np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]]), np.array([[0, 1, 2]]))
+    array([[-0.,  0.],
+           [-0.,  1.],
+           [-1.,  0.]])
+    """
     area = _signed_areas(UV, F)
     if np.all(area < 0):
         UV = UV * np.array([-1.0, 1.0])

@@ -39,7 +39,15 @@ __all__ = ["disk_chart", "orient_chart", "freeform_surface"]
 #: at mesh vertices of a unit patch with degree up to 8).
 SURF_DEG_MAX = 3
 
-#: Grid sizes tried in turn for a freeform patch; the first one meeting the tolerance is kept.
+#: Fraction of the modelling tolerance a freeform patch aims at (the best grid is kept if no
+#: grid meets it; the face is built when that one is within the tolerance): a patch at the
+#: full tolerance trimmed a noisy 24 x 7 strip to three quarters of its area.
+FREEFORM_TARGET = 0.2
+
+#: Fewest samples along the shorter side of a chart's box.
+GRID_MIN = 6
+
+#: Sample counts along the longer side of a chart's box, tried in turn.
 FREEFORM_GRIDS = (12, 20, 32, 48, 64)
 
 #: Margin added around a chart's UV box (fraction of its size) so that trimming curves lie
@@ -155,40 +163,48 @@ def _locate(UV, F, Q):
     return tri, w
 
 
-def _thin_plate(g: int) -> sp.csr_matrix:
-    """Thin-plate energy matrix of a g x g grid (second differences; linear functions are in
-    its null space, so the extension continues the chart's slopes instead of flattening)."""
+def _differences(g: int):
     d1 = sp.diags([-np.ones(g - 1), np.ones(g - 1)], [0, 1], shape=(g - 1, g))
     d2 = sp.diags([np.ones(g - 2), -2 * np.ones(g - 2), np.ones(g - 2)], [0, 1, 2],
                   shape=(g - 2, g))
-    eye = sp.identity(g)
-    duu, dvv, duv = sp.kron(d2, eye), sp.kron(eye, d2), sp.kron(d1, d1)
+    return d1, d2
+
+
+def _thin_plate(gu: int, gv: int) -> sp.csr_matrix:
+    """Thin-plate energy matrix of a gu x gv grid (second differences; linear functions are
+    in its null space, so the extension continues the chart's slopes instead of flattening)."""
+    (d1u, d2u), (d1v, d2v) = _differences(gu), _differences(gv)
+    duu = sp.kron(d2u, sp.identity(gv))
+    dvv = sp.kron(sp.identity(gu), d2v)
+    duv = sp.kron(d1u, d1v)
     return (duu.T @ duu + dvv.T @ dvv + 2 * duv.T @ duv).tocsr()
 
 
-def _grid_points(V, F, UV, g, box):
-    """3D samples on a g x g grid over the UV box (inside: interpolated; outside: extended)."""
-    u = np.linspace(box[0], box[1], g)
-    v = np.linspace(box[2], box[3], g)
+def _grid_points(V, F, UV, shape, box):
+    """3D samples on a (gu, gv) grid over the UV box (inside: interpolated; outside:
+    thin-plate extension)."""
+    gu, gv = shape
+    u = np.linspace(box[0], box[1], gu)
+    v = np.linspace(box[2], box[3], gv)
     Q = np.stack(np.meshgrid(u, v, indexing="ij"), axis=-1).reshape(-1, 2)
     tri, w = _locate(UV, F, Q)
     inside = tri >= 0
     X = np.zeros((len(Q), 3))
     X[inside] = np.einsum("pk,pkd->pd", w[inside], V[F[tri[inside]]])
     if not inside.all():
-        Qm = _thin_plate(g)
+        Qm = _thin_plate(gu, gv)
         out = np.flatnonzero(~inside)
         kn = np.flatnonzero(inside)
         A = Qm[out][:, out].tocsc()
         X[out] = spla.spsolve(A, -(Qm[out][:, kn] @ X[kn])).reshape(len(out), 3)
-    return X.reshape(g, g, 3)
+    return X.reshape(gu, gv, 3)
 
 
 def _approximate(grid: np.ndarray, tol: float):
-    g = grid.shape[0]
-    arr = Array2_gp_Pnt(1, g, 1, g)
-    for i in range(g):
-        for j in range(g):
+    gu, gv = grid.shape[:2]
+    arr = Array2_gp_Pnt(1, gu, 1, gv)
+    for i in range(gu):
+        for j in range(gv):
             x = grid[i, j]
             arr.SetValue(i + 1, j + 1, gp_Pnt(float(x[0]), float(x[1]), float(x[2])))
     fit = GeomAPI_PointsToBSplineSurface(arr, Approx_ParametrizationType.Approx_IsoParametric,
@@ -226,22 +242,27 @@ def freeform_surface(V: np.ndarray, F: np.ndarray, UV: np.ndarray, tol: float):
     Returns
     -------
     surface : Geom_BSplineSurface or None
-        The first grid of :data:`FREEFORM_GRIDS` meeting ``tol`` (else the finest tried).
+        The first grid of :data:`FREEFORM_GRIDS` within ``FREEFORM_TARGET * tol`` (else the
+        one with the smallest error).
     err : float
         Largest ``|S(UV_i) - V_i|`` over the segment's vertices.
     """
     lo, hi = UV.min(axis=0), UV.max(axis=0)
     pad = UV_MARGIN * (hi - lo).max()
     box = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
+    aspect = (box[3] - box[2]) / (box[1] - box[0])
+    target = FREEFORM_TARGET * tol
     best, best_err = None, np.inf
-    for g in FREEFORM_GRIDS:
-        surf = _approximate(_grid_points(V, F, UV, g, box), 0.25 * tol)
+    for g in FREEFORM_GRIDS:  # samples along the longer side; the other side in proportion
+        shape = (g, max(GRID_MIN, round(g * aspect))) if aspect <= 1 else \
+            (max(GRID_MIN, round(g / aspect)), g)
+        surf = _approximate(_grid_points(V, F, UV, shape, box), 0.5 * target)
         if surf is None:
             continue
         err = _vertex_error(surf, V, UV, box)
-        logger.debug("freeform grid %d: error %.3g (tol %.3g)", g, err, tol)
+        logger.debug("freeform grid %s: error %.3g (target %.3g)", shape, err, target)
         if err < best_err:
             best, best_err = surf, err
-        if err <= tol:
+        if err <= target:
             break
     return best, best_err

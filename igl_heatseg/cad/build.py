@@ -68,6 +68,11 @@ FACET_GAP_FACTOR = 1.5
 #: loop edges, and sewing must close the gap (between two such neighbours, twice this).
 REVOLVED_SEW_FRACTION = 0.45
 
+#: A boundary point moves onto the intersection of its surfaces by at most this many times
+#: their deviations from the mesh, plus MOVE_EDGE_FRACTION of the mean edge length.
+MOVE_DEV_FACTOR = 2.0
+MOVE_EDGE_FRACTION = 0.5
+
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
 MIN_TOL_REL = 1e-7
@@ -203,7 +208,7 @@ def _vertex(builder, X, tol):
     return v
 
 
-def _place_vertices(V, graph, projs, tol, ctx):
+def _place_vertices(V, graph, projs, ctx):
     """B-Rep vertex positions (least-squares point of the good surfaces around each corner)."""
     pos = {}
     for v in graph.corners.tolist():
@@ -211,13 +216,23 @@ def _place_vertices(V, graph, projs, tol, ctx):
         X = V[v]
         if ps:
             Y, res = geometry.onto_surfaces(V[v][None], ps)
-            if res[0] <= ctx["curve_tol"] and np.linalg.norm(Y[0] - V[v]) <= tol:
+            if res[0] <= ctx["curve_tol"] and \
+                    np.linalg.norm(Y[0] - V[v]) <= _move_limit(ctx, graph.vertex_sides[v]):
                 X = Y[0]
             else:
                 logger.debug("vertex %d: surfaces ill-conditioned (res %.3g), mesh vertex", v,
                              res[0])
         pos[v] = X
     return pos
+
+
+def _move_limit(ctx, sides) -> float:
+    """How far a boundary point may move onto its surfaces' intersection: the surfaces'
+    deviations from the mesh plus the sagitta of a mesh edge (the samples between mesh vertices
+    of a curved border); farther, the intersection is not the one the mesh shows (two nearly
+    tangent surfaces meet elsewhere) and the point stays."""
+    devs = [ctx["devs"][s] for s in sides if s >= 0 and np.isfinite(ctx["devs"][s])]
+    return MOVE_DEV_FACTOR * sum(devs) + MOVE_EDGE_FRACTION * ctx["mean_edge"]
 
 
 def _samples(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -253,7 +268,7 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
     if ps and len(P) > 2:
         X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
         ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
-                                          <= ctx["tol"])
+                                          <= _move_limit(ctx, (chain.left, chain.right)))
         P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
     if R is None:
         snap[chain.verts] = P[orig]
@@ -568,10 +583,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
         g, p, d, r = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
         geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
     timings["surfaces"] = time.perf_counter() - t
+    ctx["devs"] = devs
     ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons, strict=True)
                                           if r is None])
     t = time.perf_counter()
-    pos = _place_vertices(V, graph, projs, ctx["tol"], ctx)
+    pos = _place_vertices(V, graph, projs, ctx)
     ctx["pos"], ctx["chains"] = pos, graph.chains
     vertices = {v: _vertex(ctx["builder"], X, ctx["vertex_tol"]) for v, X in pos.items()}
     snap = V.copy()

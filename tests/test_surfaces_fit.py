@@ -257,7 +257,7 @@ def test_fit_surface_freeform_bump():
 def test_fit_surface_rejects_surfaces_the_normals_contradict():
     """Points on a cylinder whose normals run along its axis (a stack of flat rings): no kind
     fits both, whatever the distances."""
-    from igl_heatseg.surfaces import fit as F
+    from igl_heatseg.surfaces import select as F
 
     rng = np.random.default_rng(4)
     P, N_true = cylinder_patch(rng, 1.0, 2 * np.pi, 2.0)
@@ -562,7 +562,7 @@ def test_random_input_never_raises_or_gives_nan(seed, p, spread, flat):
 
 def test_analytic_jacobians_match_central_differences():
     """The Levenberg-Marquardt Jacobians of every kind, at generic parameters."""
-    from igl_heatseg.surfaces import fit as F
+    from igl_heatseg.surfaces import primitives as F
 
     rng = np.random.default_rng(0)
     X, sw = rng.normal(size=(40, 3)), rng.uniform(0.5, 1.0, 40)

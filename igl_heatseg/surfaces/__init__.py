@@ -5,22 +5,12 @@ Contract: takes a validated mesh (``V (n,3) float64``, ``F (m,3) int64``) and fa
 returns :class:`Surface` objects and new labels. Imports only from ``mesh`` and below.
 """
 
-from .fit import (
-    face_residuals,
-    face_samples,
-    fit_cone,
-    fit_cylinder,
-    fit_plane,
-    fit_sphere,
-    fit_surface,
-    fit_tolerance,
-    fit_torus,
-    noise_level,
-    surface_residual,
-    within_tolerance,
-)
 from .model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
+from .primitives import fit_cone, fit_cylinder, fit_plane, fit_sphere, fit_torus
 from .refine import SurfaceSegmentation, refine_segmentation, segment_adjacency
+from .samples import face_residuals, face_samples
+from .select import fit_surface, surface_residual, within_tolerance
+from .tolerance import fit_tolerance, noise_level
 
 __all__ = ["SURFACE_KINDS", "ANALYTIC_KINDS", "Surface", "fit_plane", "fit_sphere",
            "fit_cylinder", "fit_cone", "fit_torus", "fit_surface", "surface_residual",

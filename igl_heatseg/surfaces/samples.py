@@ -1,0 +1,104 @@
+"""A segment's samples for fitting (:func:`face_samples`) and the per-face residuals of its surface
+(:func:`face_residuals`).
+"""
+
+from __future__ import annotations
+
+import igl
+import numpy as np
+
+from .checks import check_faces, check_mesh
+from .model import Surface
+
+__all__ = ["face_samples", "face_residuals"]
+
+
+# ----------------------------------------------------------------------------- mesh helpers
+
+
+def face_samples(V, F, faces):
+    """Samples to fit one segment: its vertices and its face centroids, with normals and weights.
+
+    Vertex normals are computed from the segment's faces only (a crease with the neighbouring
+    segment does not bend them). Weights sum to the segment's area: half on the face centroids
+    (each face's area / 2), half on the vertices (a third of the incident faces' areas / 2).
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    faces : (k,) array_like of int, or (m,) bool
+        The segment's faces.
+
+    Returns
+    -------
+    P : (q + k, 3) float64
+        The q distinct vertices of the faces, then the k face centroids.
+    N : (q + k, 3) float64
+        Unit normals (area-weighted vertex normals, face normals); zero rows with zero weight
+        where undefined (degenerate faces).
+    w : (q + k,) float64
+        Non-negative weights.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> P, N, w = face_samples(V, np.array([[0, 1, 2], [1, 3, 2]]), [0, 1])
+    >>> P.shape, (N[-1] + 0.0).tolist(), float(w.sum())
+    ((6, 3), [0.0, 0.0, 1.0], 1.0)
+    """
+    V, F = check_mesh(V, F)
+    Fs = F[check_faces(faces, len(F))]
+    if len(Fs) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    verts, inv = np.unique(Fs, return_inverse=True)  # the segment as a small mesh
+    Vl, Fl = V[verts], inv.reshape(-1, 3).astype(np.int64)
+    dbl = igl.doublearea(Vl, Fl)
+    FN = igl.per_face_normals(Vl, Fl, np.zeros(3))
+    VN = igl.per_vertex_normals(Vl, Fl, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    wv = np.bincount(Fl.ravel(), weights=np.repeat(dbl / 12.0, 3), minlength=len(verts))
+    P = np.r_[Vl, Vl[Fl].mean(axis=1)]
+    N = np.r_[VN, FN]
+    w = np.r_[wv, dbl / 4.0]
+    bad = ~np.all(np.isfinite(N), axis=1) | (np.abs(np.linalg.norm(N, axis=1) - 1) > 1e-6)
+    N[bad], w[bad] = 0.0, 0.0
+    return P, N, w
+
+
+def face_residuals(V, F, faces, surface: Surface) -> np.ndarray:
+    """Largest absolute distance of each face's corners and centroid to a surface.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    faces : (k,) array_like of int, or (m,) bool
+        Faces to evaluate.
+    surface : Surface
+        The segment's surface.
+
+    Returns
+    -------
+    r : (k,) float64
+        Per-face residual in model units (``nan`` for ``freeform``). Compare with
+        ``MAX_DEV_FACTOR * tol``; the centroid sees the chord error of coarse facets.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0.3]])
+    >>> s = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> face_residuals(V, np.array([[0, 1, 2]]), [0], s)
+    array([0.3])
+    """
+    V, F = check_mesh(V, F)
+    Fs = F[check_faces(faces, len(F))]
+    corners = V[Fs]  # (k, 3, 3)
+    pts = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
+    d = surface.distance(pts.reshape(-1, 3)).reshape(len(Fs), 4)
+    return np.max(np.abs(d), axis=1)

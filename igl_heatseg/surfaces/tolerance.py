@@ -1,0 +1,198 @@
+"""A mesh's own fit tolerance, from its vertex noise (:func:`noise_level`), the chord error of its
+curved facets and its edge length (:func:`fit_tolerance`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import igl
+import numpy as np
+from scipy.stats import chi2
+
+from ..errors import MeshError
+from .checks import check_faces, check_mesh
+from .lm import rownorm
+
+__all__ = ["noise_level", "fit_tolerance"]
+
+#: fit_tolerance: multiple of the noise level (rms of vertex noise; a fit's rms over vertices and
+#: face centroids is ~0.8 of it, so 2.5 leaves room for the noise estimate's own error).
+K_NOISE = 2.5
+#: fit_tolerance: multiple of the tessellation's chord (sagitta) error.
+K_CHORD = 1.0
+#: fit_tolerance: floor as a fraction of the mean edge length (float32 STL coordinates and
+#: exporters' rounding; keeps the tolerance > 0 on a perfect mesh).
+K_FLOOR = 1e-3
+#: Dihedral angles (radians) above this are creases, not tessellated curvature (exporters
+#: rarely use more than 30 degrees per facet).
+CREASE_ANGLE = math.radians(40.0)
+#: Dihedral angles below this are flat (no chord error to estimate).
+FLAT_ANGLE = math.radians(0.5)
+#: Quantile of the curved edges' chord errors taken as the mesh's chord error (robust to a few
+#: badly shaped facets, covers the coarser curved surfaces).
+CHORD_QUANTILE = 0.9
+#: noise_level: least 1-ring size (vertex + neighbours) to fit a 6-coefficient quadric with
+#: at least one residual degree of freedom.
+QUAD_MIN_POINTS = 7
+
+
+# ----------------------------------------------------------------------------- noise and tolerance
+
+
+def noise_level(V, F) -> float:
+    """Noise of the mesh's vertex positions (model units), near 0 on a clean tessellation.
+
+    Each vertex with at least QUAD_MIN_POINTS - 1 neighbours gets a height-field quadric
+    ``z = a x^2 + b xy + c y^2 + d x + e y + f`` fitted to itself and its 1-ring in their
+    principal-axes frame; its residual variance ``RSS / dof`` (dof = ring size - 6) is divided
+    by the median of ``chi2(dof) / dof`` and the noise is the square root of the median over the
+    vertices (robust to creases and corners, which are a minority). The 1-ring is small enough
+    that a quadric reproduces a coarsely tessellated cylinder or sphere (its vertices lie on
+    the surface; the facets' chord error is not noise), yet has residual freedom everywhere but
+    at low-valence vertices, which are skipped. Where the curvature varies (tori, freeform) a
+    clean tessellation still leaves an O(h^3) cubic misfit: about 1 % of the edge length on a
+    torus gridded at 15 degrees (0.4 of its chord error), 6 % at 36 degrees.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+
+    Returns
+    -------
+    float
+        Estimated standard deviation of the vertices' normal displacement (0 when no vertex has
+        a large enough ring).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.arange(8.0), np.arange(8.0))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.1 * x.ravel() ** 2]     # a clean parabolic cylinder
+    >>> i = np.arange(64).reshape(8, 8)[:-1, :-1].ravel()
+    >>> F = np.r_[np.c_[i, i + 1, i + 9], np.c_[i, i + 9, i + 8]]
+    >>> noise_level(V, F) < 1e-9
+    True
+    """
+    V, F = check_mesh(V, F)
+    A = igl.adjacency_matrix(F).tocsr()
+    val = np.diff(A.indptr)
+    h = igl.avg_edge_length(V, F)
+    if not h > 0:
+        return 0.0
+    ratios = [_ring_quadric_ratios(V, A, val, n, h) for n in np.unique(val)
+              if n + 1 >= QUAD_MIN_POINTS]
+    ratios = np.concatenate(ratios) if ratios else np.zeros(0)
+    return float(h * math.sqrt(np.median(ratios))) if len(ratios) else 0.0
+
+
+def _ring_quadric_ratios(V, A, val, n, h):
+    """``RSS / dof / median(chi2(dof) / dof)`` of the 1-ring quadric of every vertex of
+    valence ``n`` (lengths in units of ``h``)."""
+    vs = np.flatnonzero(val == n)
+    nb = A.indices[A.indptr[vs][:, None] + np.arange(n)]
+    X = np.concatenate([V[vs][:, None], V[nb]], axis=1) / h  # (g, n + 1, 3)
+    X -= X.mean(axis=1, keepdims=True)
+    _, E = np.linalg.eigh(np.einsum("gki,gkj->gij", X, X))
+    L = np.einsum("gki,gij->gkj", X, E)  # columns: normal, minor, major tangent
+    z, x, y = L[..., 0], L[..., 2], L[..., 1]
+    B = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], axis=-1)  # (g, n + 1, 6)
+    BtB = np.einsum("gki,gkj->gij", B, B) + 1e-10 * np.eye(6)
+    coef = np.linalg.solve(BtB, np.einsum("gki,gk->gi", B, z)[..., None])[..., 0]
+    rss = np.sum((z - np.einsum("gki,gi->gk", B, coef)) ** 2, axis=1)
+    dof = n + 1 - 6
+    return rss / dof / (chi2.median(dof) / dof)
+
+
+def _segment_chord_error(V, F, faces) -> float:
+    """Chord error of one segment, known to be one surface (no crease cut): each edge, a chord
+    of length ``c`` between vertices whose normals (from the segment's faces only) differ by
+    ``theta``, has sagitta ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of the edges
+    with ``theta >= FLAT_ANGLE`` (so a few mislabelled faces across a crease do not count)."""
+    verts, inv = np.unique(F[faces], return_inverse=True)
+    Vl, Fl = V[verts], inv.reshape(-1, 3).astype(np.int64)
+    VN = igl.per_vertex_normals(Vl, Fl, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
+    E = igl.edges(Fl)
+    theta = np.arccos(np.clip(np.einsum("ij,ij->i", VN[E[:, 0]], VN[E[:, 1]]), -1.0, 1.0))
+    keep = theta >= FLAT_ANGLE  # also drops nan normals of degenerate faces
+    if not np.any(keep):
+        return 0.0
+    c = rownorm(Vl[E[keep, 0]] - Vl[E[keep, 1]])
+    return float(np.quantile(0.5 * c * np.tan(theta[keep] / 4.0), CHORD_QUANTILE))
+
+
+def _chord_error(V, F) -> float:
+    """Chord (sagitta) error of the tessellation's curved facets: for each interior edge whose
+    dihedral angle ``theta`` lies in [FLAT_ANGLE, CREASE_ANGLE], a circular arc through the two
+    faces with their mean height ``c`` across the edge as chords has sagitta
+    ``c / 2 tan(theta / 4)``; the CHORD_QUANTILE quantile of those."""
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    f, e = np.nonzero(TT > np.arange(len(F))[:, None])  # each interior edge once
+    g = TT[f, e]
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    theta = np.arccos(np.clip(np.einsum("ij,ij->i", FN[f], FN[g]), -1.0, 1.0))
+    keep = (theta >= FLAT_ANGLE) & (theta <= CREASE_ANGLE)
+    if not np.any(keep):
+        return 0.0
+    f, e, g, theta = f[keep], e[keep], g[keep], theta[keep]
+    length = np.linalg.norm(V[F[f, (e + 1) % 3]] - V[F[f, e]], axis=1)
+    dbl = igl.doublearea(V, F)
+    c = 0.5 * (dbl[f] + dbl[g]) / np.maximum(length, 1e-300)
+    return float(np.quantile(0.5 * c * np.tan(theta / 4.0), CHORD_QUANTILE))
+
+
+def fit_tolerance(V, F, noise: float | None = None, faces=None) -> float:
+    """Fit tolerance of a mesh, from its own noise, tessellation and size.
+
+    ``tol = sqrt((K_NOISE * noise)^2 + (K_CHORD * chord)^2) + K_FLOOR * mean_edge``
+
+    * ``noise`` (:func:`noise_level`) — a fit's residual on noisy samples is about the noise;
+    * ``chord`` — the sagitta of the curved facets: a cylinder of radius r tessellated with
+      facets of width c has its vertices on it but its face centroids up to
+      ``r (1 - cos(c / 2r))`` inside, which a fit must accept (see :func:`_chord_error`);
+    * ``K_FLOOR * mean_edge`` — keeps a perfect mesh's tolerance above round-off.
+
+    Every term is a length of the mesh, so the tolerance scales with the mesh (scaled by 1000,
+    the tolerance is 1000 times larger) and no constant is in model units.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float64
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+    noise : float, optional
+        Noise level if known (model units); estimated by :func:`noise_level` otherwise (over
+        the whole mesh: pass it once computed when calling per segment).
+    faces : (k,) array_like of int, or (m,) bool, optional
+        One segment's faces: its own chord error instead of the whole mesh's (a coarse small
+        hole next to a finely tessellated large fillet), from the turn of its vertex normals
+        along each edge, without a crease cut (facets of a thin fillet may turn by 90 degrees).
+
+    Returns
+    -------
+    float
+        Tolerance (model units) for :func:`fit_surface` and :func:`within_tolerance`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> round(fit_tolerance(V, F, noise=0.01), 5)   # 2.5 * noise + 1e-3 * mean edge length
+    0.02608
+    """
+    V, F = check_mesh(V, F)
+    if noise is None:
+        noise = noise_level(V, F)
+    elif not (math.isfinite(noise) and noise >= 0):
+        raise MeshError(f"noise must be a finite float >= 0, got {noise!r}")
+    if faces is None:
+        chord = _chord_error(V, F)
+    else:
+        chord = _segment_chord_error(V, F, check_faces(faces, len(F)))
+    h = igl.avg_edge_length(V, F)
+    return float(math.hypot(K_NOISE * noise, K_CHORD * chord) + K_FLOOR * h)

@@ -32,7 +32,6 @@ resident memory (``VmHWM``; see :func:`peak_rss_gb`).
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import platform
 import subprocess
@@ -49,20 +48,9 @@ IRON = Path("/work/shared/data/scan/iron.ply")
 
 def _segment(mesh, solver: str):
     """``segment_mesh`` with the named solver ("exact" or "fast")."""
-    from igl_heatseg import segment as S
+    from igl_heatseg.segmentation import segment_mesh
 
-    if "solver" in inspect.signature(S.segment_mesh).parameters:
-        return S.segment_mesh(mesh, solver=solver, keep_solvers=False)
-    # segment.py without the solver switch: swap the class it uses.
-    from igl_heatseg.heat.fast import FastHeatSolver
-    from igl_heatseg.heat.exact import HeatSolver
-
-    saved = S.HeatSolver
-    S.HeatSolver = FastHeatSolver if solver == "fast" else HeatSolver
-    try:
-        return S.segment_mesh(mesh, keep_solvers=False)
-    finally:
-        S.HeatSolver = saved
+    return segment_mesh(mesh, solver=solver, keep_solvers=False)
 
 
 def _cholmod(A):
@@ -155,7 +143,7 @@ def agreement(area: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 def part1(path: Path, skip_exact: bool, repeat: int = 1) -> dict:
     from igl_heatseg.io.meshes import load_mesh
-    from igl_heatseg.segmentation.paper import face_areas
+    from igl_heatseg.mesh.geometry import face_areas
 
     t = time.perf_counter()
     mesh = load_mesh(path)

@@ -14,6 +14,15 @@ from .metrics import (
     read_labels,
     read_truth,
 )
+from .surfaces import (
+    boundary_length,
+    boundary_length_ratio,
+    face_kinds,
+    read_surface_types,
+    segment_ratio,
+    surface_kind,
+    type_accuracy,
+)
 
 __all__ = [
     "Evaluation",
@@ -24,4 +33,11 @@ __all__ = [
     "contingency_table",
     "read_labels",
     "read_truth",
+    "type_accuracy",
+    "boundary_length",
+    "boundary_length_ratio",
+    "segment_ratio",
+    "surface_kind",
+    "face_kinds",
+    "read_surface_types",
 ]

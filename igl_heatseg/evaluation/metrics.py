@@ -56,6 +56,7 @@ from scipy.sparse.csgraph import dijkstra
 from ..errors import MeshError
 from ..mesh.geometry import face_areas
 from ..mesh.topology import edge_topology
+from .surfaces import boundary_length, face_kinds, type_accuracy
 
 __all__ = [
     "Evaluation",
@@ -490,6 +491,16 @@ class Evaluation:
     hamming, hamming_rm, hamming_rf : float
     psb_rand_index : float
     gce, lce : float
+    boundary_ratio : float
+        Predicted over true boundary length (edges between differently labelled faces): 1 when
+        the boundaries are right, > 1 staircases and spurious cuts, < 1 missed boundaries
+        (:func:`igl_heatseg.evaluation.surfaces.boundary_length_ratio`).
+    segment_ratio : float
+        ``n_segments`` over the true segment count (mean over the truths).
+    type_accuracy : float or None
+        Area share whose predicted segment's surface kind equals the true face's kind
+        (:func:`igl_heatseg.evaluation.surfaces.type_accuracy`, always area-weighted); ``None``
+        unless both the predicted and the true surface types were given.
     per_truth : list of dict
         The same scores for each truth separately.
     """
@@ -509,6 +520,9 @@ class Evaluation:
     psb_rand_index: float
     gce: float
     lce: float
+    boundary_ratio: float = math.nan
+    segment_ratio: float = math.nan
+    type_accuracy: float | None = None
     per_truth: list = field(default_factory=list, repr=False)
 
     def as_dict(self) -> dict:
@@ -530,6 +544,8 @@ _SCORES = (
     "psb_rand_index",
     "gce",
     "lce",
+    "boundary_ratio",
+    "segment_ratio",
 )
 
 
@@ -541,6 +557,8 @@ def evaluate_labels(
     *,
     weighting: str = "area",
     cut_metric: bool = True,
+    pred_types: Sequence[str | None] | None = None,
+    truth_types: Sequence[str | None] | None = None,
 ) -> Evaluation:
     """Score predicted face labels against one or several ground truths.
 
@@ -557,6 +575,13 @@ def evaluate_labels(
         Face weights for purity, coverage, rand_index, Hamming, GCE, LCE.
     cut_metric : bool
         Compute the cut discrepancy (a Dijkstra per truth; the slowest score).
+    pred_types : sequence of str, optional
+        Surface type of every predicted label (``pred_types[k]`` for label ``k``; e.g. the
+        ``type`` of each entry of robust mode's ``report.json`` ``surfaces``).
+    truth_types : sequence of str, optional
+        Surface type of every true label (ABC names such as ``Plane`` or kinds; see
+        :func:`igl_heatseg.evaluation.surfaces.read_surface_types`).  With ``pred_types``,
+        gives ``type_accuracy``; needs a single truth.
 
     Returns
     -------
@@ -565,8 +590,19 @@ def evaluate_labels(
     Raises
     ------
     MeshError
-        If a label array's length differs from the face count, labels are not integers, or
-        ``weighting`` is unknown.
+        If a label array's length differs from the face count, labels are not integers,
+        ``weighting`` is unknown, a label has no type, or types come with several truths.
+
+    Examples
+    --------
+    Two triangles of a unit square, one plane predicted where the truth has a plane and a
+    cone: half the area is typed right, and the predicted boundary (none) is 0 of the true one.
+
+    >>> ev = evaluate_labels([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],
+    ...                      [[0, 1, 2], [0, 2, 3]], [0, 0], [0, 1],
+    ...                      pred_types=["plane"], truth_types=["Plane", "Cone"])
+    >>> ev.purity, ev.coverage, ev.type_accuracy, ev.boundary_ratio, ev.segment_ratio
+    (0.5, 1.0, 0.5, 0.0, 0.5)
     """
     from ..mesh.checks import as_mesh_arrays
 
@@ -587,13 +623,20 @@ def evaluate_labels(
         raise MeshError("truth: no ground-truth labelings given")
     tlist = [_as_labels(t, f"truth {k}", m) for k, t in enumerate(tlist)]
     w = face_areas(V, F) if weighting == "area" else None
+    typed = pred_types is not None and truth_types is not None
+    if typed and len(tlist) != 1:
+        raise MeshError(f"surface types: need a single truth, got {len(tlist)} labelings")
 
+    topo = edge_topology(F)
     if cut_metric:
-        topo = edge_topology(F)
         G = _edge_graph(V, topo.E)
         radius = mean_radius(V, F)
+    bp = boundary_length(V, F, p, topo)
+    kp = len(np.unique(p))
     per = []
     for t in tlist:
+        bt = boundary_length(V, F, t, topo)
+        bratio = (bp / bt) if bt > 0 else (1.0 if bp == 0 else math.inf)
         rm, rf, hd = hamming_distance(p, t, w)
         gce, lce = consistency_errors(p, t, w)
         per.append(
@@ -611,9 +654,16 @@ def evaluate_labels(
                 psb_rand_index=psb_rand_index(p, t),
                 gce=gce,
                 lce=lce,
+                boundary_ratio=bratio,
+                segment_ratio=kp / len(np.unique(t)),
             )
         )
     mean = {k: float(np.mean([d[k] for d in per])) for k in _SCORES}
+    if typed:
+        acc = type_accuracy(
+            face_kinds(p, pred_types), face_kinds(tlist[0], truth_types), face_areas(V, F)
+        )
+        per[0]["type_accuracy"] = mean["type_accuracy"] = acc
     return Evaluation(
         n_faces=m,
         n_segments=int(len(np.unique(p))),

@@ -1,6 +1,6 @@
 """Robust mode: the paper's seeds + heat pipeline made to survive scan noise and smooth blends.
 
-The paper's mode (:func:`igl_heatseg.segmentation.paper.segment_mesh`) stays the default and faithful.
+The paper's mode (:func:`igl_heatseg.segmentation.segment_mesh`) stays the default and faithful.
 This mode changes what the seeds are, measured on generated machined parts with exact B-Rep
 labels (``tools/make_parts.py``) and the two ABC parts; see ``benchmarks/segmentation_table.py``.
 
@@ -554,7 +554,7 @@ def segment_robust(
     Parameters
     ----------
     mesh : CleanMesh
-        From :func:`igl_heatseg.io.meshes.load_mesh` or :func:`igl_heatseg.mesh.checks.validate_mesh`.
+        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.mesh.validate_mesh`.
     theta : float
         Crease threshold on the filtered dihedral deviation, radians in ``(0, pi]``.
     eps : float
@@ -693,7 +693,8 @@ def segment_robust(
     surfaces = None
     if fit_surfaces:
         t = time.perf_counter()
-        ref = refine_segmentation(W, F, labels1, fit_tolerance(V, F), progress=progress)
+        ref = refine_segmentation(V, F, labels1, fit_tolerance(V, F), normals_from=W,
+                                  progress=progress)
         labels1, k1 = ref.labels, len(ref.surfaces)
         vlab1 = np.zeros(n, dtype=np.int64)
         vlab1[F.ravel()] = np.repeat(labels1, 3)

@@ -158,7 +158,7 @@ def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np
     return fa[keep], fb[keep]
 
 
-def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray):
+def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray, W: np.ndarray | None = None):
     """Samples to fit a face set: its vertices, with normals from those faces only.
 
     Parameters
@@ -167,6 +167,8 @@ def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray):
     F : (m, 3) int64
     faces : (k,) int64
         Face ids.
+    W : (n, 3) float64, optional
+        Positions the normals are computed from (e.g. a denoised copy of ``V``); default ``V``.
 
     Returns
     -------
@@ -190,7 +192,7 @@ def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray):
     verts, inv = np.unique(Fs, return_inverse=True)
     inv = inv.reshape(-1, 3)
     A = face_areas(V, Fs)
-    FN = face_normals(V, Fs)
+    FN = face_normals(V if W is None else W, Fs)
     AN = np.repeat(FN * A[:, None], 3, axis=0)  # one row per corner
     N = np.stack([np.bincount(inv.ravel(), weights=AN[:, c], minlength=len(verts))
                   for c in range(3)], axis=1)
@@ -199,11 +201,13 @@ def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray):
     return V[verts], N, w
 
 
-def _fit(V, F, faces, tol, kinds=None) -> Surface:
+def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
+    """Fit ``faces`` (positions from ``V``; normals from ``W`` when given, face normals ``FN``
+    indexed by face id)."""
     if len(faces) < MIN_FIT_FACES:
         return Surface("freeform", {"centroid": V[F[faces]].reshape(-1, 3).mean(axis=0)},
                        area=float(face_areas(V, F[faces]).sum()))
-    P, N, w = vertex_samples(V, F, faces)
+    P, N, w = vertex_samples(V, F, faces, W)
     # a kind needs more samples than parameters to be evidence (any 4 points lie on a sphere)
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
@@ -213,8 +217,8 @@ def _fit(V, F, faces, tol, kinds=None) -> Surface:
         # three (radius, height) profile points, which a torus always passes through. The face
         # normals must agree with the surface's too.
         A = face_areas(V, F[faces])
-        off = _normal_angle(V, F, face_normals(V, F[faces]), np.arange(len(faces)), s,
-                            F[faces]) > GROW_ANGLE
+        FN = face_normals(V if W is None else W, F) if FN is None else FN
+        off = _normal_angle(V, F, FN, faces, s) > GROW_ANGLE
         if A[off].sum() > NORMAL_OFF_SHARE * A.sum():
             return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
                            max_dev=s.max_dev, area=float(A.sum()))
@@ -242,10 +246,10 @@ def _corner_rms(V, F, faces, s: Surface) -> np.ndarray:
     return np.sqrt((d * d).mean(axis=1))
 
 
-def _normal_angle(V, F, FN, faces, s: Surface, Fs=None) -> np.ndarray:
-    """Angle between each face's normal and the surface normal at its centroid's projection
-    (``Fs``: the faces' rows when ``FN`` is indexed by position instead of by face id)."""
-    SN = s.normals(V[(F[faces] if Fs is None else Fs)].mean(axis=1))
+def _normal_angle(V, F, FN, faces, s: Surface) -> np.ndarray:
+    """Angle between each face's normal (``FN``, by face id) and the surface normal at its
+    centroid's projection."""
+    SN = s.normals(V[F[faces]].mean(axis=1))
     cos = np.abs(np.einsum("ij,ij->i", SN, FN[faces]))
     return np.arccos(np.clip(cos, -1.0, 1.0))
 
@@ -261,7 +265,7 @@ def _fits_face(V, F, FN, faces, s, tol, k_tol):
     )
 
 
-def _grow_one(V, F, FN, TT, free, seed, tol):
+def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
     """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface)."""
     region = np.zeros(len(F), dtype=bool)
     ring = np.array([seed])
@@ -270,7 +274,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol):
         ring = np.unique(TT[ring].ravel())
         ring = ring[(ring >= 0) & free[np.maximum(ring, 0)]]
         patch = np.union1d(patch, ring)
-    s = _fit(V, F, np.asarray(patch), tol)
+    s = _fit(V, F, np.asarray(patch), tol, W=W, FN=FN)
     if not s.is_analytic:
         return np.array([seed]), s
     region[seed] = True
@@ -286,7 +290,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol):
             stalled = False
             n = int(region.sum())
             if n >= 2 * fitted:
-                s2 = _fit(V, F, np.flatnonzero(region), tol)
+                s2 = _fit(V, F, np.flatnonzero(region), tol, W=W, FN=FN)
                 if _explains(s2, tol):
                     s, fitted = s2, n
             continue
@@ -295,19 +299,19 @@ def _grow_one(V, F, FN, TT, free, seed, tol):
         near = cand[_fits_face(V, F, FN, cand, s, tol, STALL_TOL)]
         if not len(near):
             break
-        s2 = _fit(V, F, np.r_[np.flatnonzero(region), near], tol)
+        s2 = _fit(V, F, np.r_[np.flatnonzero(region), near], tol, W=W, FN=FN)
         if not _explains(s2, tol) or s2.max_dev > 3 * tol:
             break
         s, stalled = s2, True
     faces = np.flatnonzero(region)
     if fitted < len(faces):
-        s2 = _fit(V, F, faces, tol)
+        s2 = _fit(V, F, faces, tol, W=W, FN=FN)
         if _explains(s2, tol):
             s = s2
     return faces, s
 
 
-def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
+def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
     """Split a face set into regions that one surface each explains, by region growing.
 
     Parameters
@@ -320,6 +324,8 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
         Fit tolerance (model units).
     FN : (m, 3) float64, optional
         Face normals; TT : (m, 3) int64, optional, ``igl.triangle_triangle_adjacency``.
+    W : (n, 3) float64, optional
+        Positions for normals (a denoised copy of ``V``).
 
     Returns
     -------
@@ -327,7 +333,7 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
         Region id of each face of ``faces``, ``0..r-1``; faces no surface explains form
         regions of their own (their connected pieces).
     """
-    FN = face_normals(V, F) if FN is None else FN
+    FN = face_normals(V if W is None else W, F) if FN is None else FN
     TT = _adjacency(F) if TT is None else TT
     free = np.zeros(len(F), dtype=bool)
     free[faces] = True
@@ -341,7 +347,7 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
     for seed in order.tolist():
         if not free[seed] or tried[seed]:
             continue
-        grown, s = _grow_one(V, F, FN, TT, free, seed, tol)
+        grown, s = _grow_one(V, F, FN, TT, free, seed, tol, W)
         if len(grown) < MIN_REGION_FACES:
             tried[grown] = True
             continue
@@ -358,13 +364,14 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None) -> np.ndarray:
     return out[faces]
 
 
-def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None) -> int:
+def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, FN=None) -> int:
     """Greedy merging of adjacent segments whose union one surface explains; cheapest first.
 
     ``rejected`` caches the unions found unexplained (keyed by both parts' faces), so a later
     round does not refit a pair that has not changed.
     """
     rejected = set() if rejected is None else rejected
+    dirty: set = set()
     parent = {k: k for k in fits}
 
     def find(a):
@@ -392,22 +399,24 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None) -> int:
         if key in rejected:
             return
         da, db = _rms_to(V, F, faces_of[b], fits[a]), _rms_to(V, F, faces_of[a], fits[b])
-        union = np.concatenate([faces_of[a], faces_of[b]])
-        if min(da, db) <= tol:
-            u = _fit(V, F, union, tol, kinds=((fits[a] if da <= db else fits[b]).kind,))
+        if da <= tol and _explains(fits[a], tol):
+            u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
+        elif db <= tol and _explains(fits[b], tol):
+            u = fits[b]
         elif min(da, db) <= PRECHECK_TOL * tol or (
             max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
             and not _explains(fits[a], tol)
             and not _explains(fits[b], tol)
         ):
-            u = _fit(V, F, union, tol)
+            u = _fit(V, F, np.concatenate([faces_of[a], faces_of[b]]), tol, W=W, FN=FN)
         else:
             rejected.add(key)
             return
         if not _explains(u, tol):
             rejected.add(key)
         else:
-            heapq.heappush(heap, (u.rms, a, b, id(u), u))
+            cost = min(da, db) if u is fits[a] or u is fits[b] else u.rms
+            heapq.heappush(heap, (cost, a, b, id(u), u))
 
     for a, b in sorted(pairs):
         push(a, b)
@@ -419,6 +428,8 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None) -> int:
         parent[b] = a
         faces_of[a] = np.concatenate([faces_of[a], faces_of.pop(b)])
         fits[a] = u
+        dirty.add(a)
+        dirty.discard(b)
         del fits[b]
         nbrs[a] = (nbrs[a] | nbrs.pop(b)) - {a, b}
         for c in nbrs[a]:
@@ -428,10 +439,12 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None) -> int:
             push(a, c)
     for k, faces in faces_of.items():
         labels[faces] = k
+    for k in dirty:  # one refit per merged segment, on all its faces
+        fits[k] = _fit(V, F, faces_of[k], tol, W=W, FN=FN)
     return merged
 
 
-def _move_boundary_faces(V, F, labels, fits: dict, tol: float) -> int:
+def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) -> int:
     """Lloyd passes: faces on boundaries go to the neighbouring surface clearly nearer to them;
     the segments that changed are refitted before the next pass."""
     moved = 0
@@ -464,7 +477,7 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float) -> int:
         moved += int((new != labels).sum())
         labels[:] = new
         for k in changed.tolist():
-            fits[k] = _fit(V, F, np.flatnonzero(labels == k), tol)
+            fits[k] = _fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
     return moved
 
 
@@ -506,6 +519,7 @@ def refine_segmentation(
     tol: float | None = None,
     *,
     split: bool = True,
+    normals_from: np.ndarray | None = None,
     progress=None,
 ) -> SurfaceSegmentation:
     """Fit a surface to every segment; split, merge and move boundaries by the fits.
@@ -521,6 +535,9 @@ def refine_segmentation(
         Fit tolerance (model units); default :func:`~igl_heatseg.surfaces.fit.fit_tolerance`.
     split : bool
         Split segments that no surface explains (step 2).
+    normals_from : (n, 3) float64, optional
+        Positions the normals are taken from (a denoised copy of ``V``: noisy face normals
+        mislead seeds and growth); distances are always measured on ``V``.
     progress : callable(stage, fraction), optional
 
     Returns
@@ -541,8 +558,9 @@ def refine_segmentation(
     F = np.ascontiguousarray(F, dtype=np.int64)
     t0 = time.perf_counter()
     timings = {}
+    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
     TT = _adjacency(F)
-    FN = face_normals(V, F)
+    FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
     tol = fit_tolerance(V, F) if tol is None else float(tol)
     timings["tolerance"] = time.perf_counter() - t0
@@ -555,9 +573,9 @@ def refine_segmentation(
     for i, k in enumerate(ks):
         progress("fit", i / max(len(ks), 1))
         faces = np.flatnonzero(labels == k)
-        s = _fit(V, F, faces, tol)
+        s = _fit(V, F, faces, tol, W=W, FN=FN)
         if split and not _explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
-            sub = grow_regions(V, F, faces, tol, FN, TT)
+            sub = grow_regions(V, F, faces, tol, FN, TT, W)
             if sub.max() > 0:
                 n_split += 1
                 for r in range(int(sub.max()) + 1):
@@ -565,7 +583,7 @@ def refine_segmentation(
                     lab = k if r == 0 else nxt
                     nxt += r > 0
                     labels[part] = lab
-                    fits[lab] = _fit(V, F, part, tol)
+                    fits[lab] = _fit(V, F, part, tol, W=W, FN=FN)
                 continue
         fits[k] = s
     timings["fit_split"] = time.perf_counter() - t
@@ -576,15 +594,16 @@ def refine_segmentation(
     for _ in range(ROUNDS):  # moves can make segments adjacent that a merge then joins
         t = time.perf_counter()
         progress("merge", 0.0)
-        m_round = _merge(V, F, labels, tol, fits, rejected)
+        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN)
         timings["merge"] += time.perf_counter() - t
         t = time.perf_counter()
         progress("boundaries", 0.0)
-        mv_round = _move_boundary_faces(V, F, labels, fits, tol)
+        mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN)
         pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
         if len(np.unique(pieces)) != len(fits):
             labels = pieces
-            fits = {k: _fit(V, F, np.flatnonzero(labels == k), tol) for k in np.unique(labels)}
+            fits = {k: _fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+                    for k in np.unique(labels)}
         timings["boundaries"] += time.perf_counter() - t
         merged += m_round
         moved += mv_round
@@ -601,7 +620,7 @@ def refine_segmentation(
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     labels = rank[inv].astype(np.int64)
-    surfaces = [_fit(V, F, np.flatnonzero(labels == k), tol) for k in range(len(order))]
+    surfaces = [_fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN) for k in range(len(order))]
     timings["final_fit"] = time.perf_counter() - t
     progress("surfaces", 1.0)
     log.info("surfaces: %d segments (%d split, %d merges, %d faces moved), tol %.3g",

@@ -29,7 +29,38 @@ def _as_points(P, name: str = "P") -> np.ndarray:
 
 
 def check_inputs(P, N, w, need_normals: bool):
-    """Validated ``P``, ``N`` (or None) and weights normalised to sum 1."""
+    """Validated ``P``, ``N`` (or None) and weights normalised to sum 1.
+
+    Parameters
+    ----------
+    P : (p, 3) array_like of float
+        Points.
+    N : (p, 3) array_like of float or None
+        Normals at the points.
+    w : (p,) array_like of float or None
+        Non-negative weights with a positive sum; uniform when None.
+    need_normals : bool
+        Whether ``N`` is required.
+
+    Returns
+    -------
+    P : (p, 3) ndarray of float64
+    N : (p, 3) ndarray of float64 or None
+    w : (p,) ndarray of float64
+        The weights divided by their sum (``1 / p`` each when ``w`` is None).
+
+    Raises
+    ------
+    MeshError
+        On arrays of the wrong shape, non-finite values, a missing required ``N`` or weights
+        that are negative or without a positive sum.
+
+    Examples
+    --------
+    >>> P, N, w = check_inputs([[0, 0, 0], [1, 0, 0]], None, [1, 3], need_normals=False)
+    >>> P.dtype, N, w.tolist()
+    (dtype('float64'), None, [0.25, 0.75])
+    """
     P = _as_points(P)
     if N is None:
         if need_normals:
@@ -51,6 +82,26 @@ def check_inputs(P, N, w, need_normals: bool):
 
 
 def check_mesh(V, F):
+    """Validated vertices and triangles.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+        Vertices.
+    F : (m, 3) array_like of int
+        Triangles.
+
+    Returns
+    -------
+    V : (n, 3) ndarray of float64
+    F : (m, 3) ndarray of int64
+
+    Raises
+    ------
+    MeshError
+        On a wrong shape or dtype, non-finite vertices, no triangles or indices outside
+        ``[0, n)``.
+    """
     V = _as_points(V, "V")
     F = np.asarray(F)
     if F.ndim != 2 or F.shape[1] != 3 or not np.issubdtype(F.dtype, np.integer):
@@ -61,6 +112,32 @@ def check_mesh(V, F):
 
 
 def check_faces(faces, m: int) -> np.ndarray:
+    """Face indices from indices or a mask over a mesh's ``m`` faces.
+
+    Parameters
+    ----------
+    faces : (k,) array_like of int, or (m,) array_like of bool
+        Face indices, or a mask over all faces.
+    m : int
+        Number of faces of the mesh.
+
+    Returns
+    -------
+    (k,) ndarray of int64
+        The indices (those of the mask's True entries, ascending).
+
+    Raises
+    ------
+    MeshError
+        On a mask not of shape ``(m,)``, a non-integer or non-1-D array, or indices outside
+        ``[0, m)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_faces(np.array([False, True, True]), 3).tolist()
+    [1, 2]
+    """
     faces = np.asarray(faces)
     if faces.dtype == bool:
         if faces.shape != (m,):
@@ -74,4 +151,20 @@ def check_faces(faces, m: int) -> np.ndarray:
 
 
 def weights_area(w_raw) -> float:
+    """Area a fit reports: the sum of the caller's weights (face areas), nan without weights.
+
+    Parameters
+    ----------
+    w_raw : (p,) array_like of float or None
+        The weights as given, before :func:`check_inputs` normalises them.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> weights_area([0.5, 1.5]), weights_area(None)
+    (2.0, nan)
+    """
     return math.nan if w_raw is None else float(np.sum(w_raw))

@@ -46,18 +46,75 @@ SEED_RCOND = 1e-9
 
 
 def normalise(P, w):
-    """Weighted centroid ``m`` and spread ``s`` (RMS distance to ``m``; 1 when all coincide)."""
+    """Weighted centroid ``m`` and spread ``s`` (RMS distance to ``m``; 1 when all coincide).
+
+    Parameters
+    ----------
+    P : (p, 3) ndarray of float64
+        Points.
+    w : (p,) ndarray of float64
+        Non-negative weights summing to 1.
+
+    Returns
+    -------
+    m : (3,) ndarray
+        Weighted centroid.
+    s : float
+        Weighted RMS distance of the points to ``m``; 1.0 when it is 0 (so ``(P - m) / s`` is
+        always defined).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m, s = normalise(np.array([[0., 0, 0], [2, 0, 0]]), np.array([0.5, 0.5]))
+    >>> m.tolist(), s
+    ([1.0, 0.0, 0.0], 1.0)
+    """
     m = w @ P
     s = math.sqrt(max(float(w @ np.einsum("ij,ij->i", P - m, P - m)), 0.0))
     return m, (s if s > 0 else 1.0)
 
 
 def rownorm(X: np.ndarray) -> np.ndarray:
+    """Euclidean norms of the rows of a 2-D array.
+
+    Parameters
+    ----------
+    X : (p, k) ndarray of float64
+        Rows.
+
+    Returns
+    -------
+    (p,) ndarray of float64
+        ``|X[i]|``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rownorm(np.array([[3., 4, 0], [0, 0, 1]]))
+    array([5., 1.])
+    """
     return np.sqrt(np.einsum("ij,ij->i", X, X))
 
 
 def seed_sample(X, N, wn):
-    """The strided subsample (weights renormalised) that seeds are computed from."""
+    """The strided subsample (weights renormalised) that seeds are computed from.
+
+    Parameters
+    ----------
+    X : (p, 3) ndarray of float64
+        Points (normalised coordinates).
+    N : (p, 3) ndarray of float64 or None
+        Unit normals, if any.
+    wn : (p,) ndarray of float64
+        Non-negative weights summing to 1.
+
+    Returns
+    -------
+    Xs, Ns, ws : ndarray
+        The rows :func:`subsample` picks (all of them, the inputs themselves, for at most
+        LM_MAX_POINTS points), ``Ns`` None when ``N`` is, and their weights rescaled to sum 1.
+    """
     idx = subsample(len(X))
     if len(idx) == len(X):
         return X, N, wn
@@ -66,14 +123,46 @@ def seed_sample(X, N, wn):
 
 
 def subsample(p: int, most: int = LM_MAX_POINTS) -> np.ndarray:
-    """Evenly strided indices of at most ``most`` of ``p`` points (deterministic)."""
+    """Evenly strided indices of at most ``most`` of ``p`` points (deterministic).
+
+    Parameters
+    ----------
+    p : int
+        Number of points.
+    most : int, optional
+        Largest number of indices; LM_MAX_POINTS by default.
+
+    Returns
+    -------
+    (min(p, most),) ndarray of int
+        ``arange(p)`` when ``p <= most``, else ``most`` indices evenly spaced over
+        ``[0, p - 1]``, first and last included.
+
+    Examples
+    --------
+    >>> subsample(10, most=4).tolist()
+    [0, 3, 6, 9]
+    """
     if p <= most:
         return np.arange(p)
     return np.linspace(0, p - 1, most).astype(np.int64)
 
 
 def least_eig(M: np.ndarray):
-    """Eigenvalues (ascending) and the eigenvector of the least one, of a symmetric matrix."""
+    """Eigenvalues (ascending) and the eigenvector of the least one, of a symmetric matrix.
+
+    Parameters
+    ----------
+    M : (k, k) ndarray of float64
+        Symmetric matrix.
+
+    Returns
+    -------
+    lam : (k,) ndarray
+        Eigenvalues in ascending order.
+    e : (k,) ndarray
+        Unit eigenvector of ``lam[0]``.
+    """
     lam, E = np.linalg.eigh(M)
     return lam, E[:, 0]
 
@@ -82,6 +171,28 @@ def nearest_to_lines(X, D, w):
     """Point minimising the weighted squared distances to the lines ``X + t D`` (rows unit).
 
     Works in any dimension; ``None`` when the lines are (nearly) parallel.
+
+    Parameters
+    ----------
+    X : (p, k) ndarray of float64
+        A point on each line.
+    D : (p, k) ndarray of float64
+        Unit directions of the lines.
+    w : (p,) ndarray of float64
+        Non-negative weights.
+
+    Returns
+    -------
+    (k,) ndarray or None
+        The point, or ``None`` when the normal equations' least eigenvalue is below SEED_RCOND
+        times their largest (parallel lines: no single nearest point).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> X = np.array([[0., 0], [1, 1]])
+    >>> nearest_to_lines(X, np.array([[1., 0], [0, 1]]), np.ones(2)).tolist()
+    [1.0, 0.0]
     """
     wD = D * w[:, None]
     A = w.sum() * np.eye(X.shape[1]) - wD.T @ D  # sum w (I - d d^T)
@@ -134,7 +245,31 @@ def _lm(res, x0, max_iter: int = LM_MAX_ITER, give_up: float = math.inf):
 
 def run_lm(make_res, X, wn, x0, give_up: float = math.inf):
     """LM on at most LM_MAX_POINTS strided samples, then a short polish on all points. With a
-    give-up level, a first pass on LM_COARSE_POINTS samples drops hopeless candidates cheaply."""
+    give-up level, a first pass on LM_COARSE_POINTS samples drops hopeless candidates cheaply.
+
+    Parameters
+    ----------
+    make_res : callable
+        ``make_res(Xa, sw)`` returns the residual function ``res(x, jac=False)`` of the points
+        ``Xa`` with square-root weights ``sw``: the weighted residuals ``(p,)``, and with
+        ``jac`` also their Jacobian ``(p, k)`` in the parameters ``x``.
+    X : (p, 3) ndarray of float64
+        Points (centred, unit-spread coordinates).
+    wn : (p,) ndarray of float64
+        Non-negative weights summing to 1 (renormalised on each subsample).
+    x0 : (k,) array_like of float64
+        Initial parameters.
+    give_up : float, optional
+        Cost (weighted mean squared residual, the coordinates of ``X``) above which a creeping
+        iteration stops after LM_GIVE_UP_AFTER iterations; a pass that ends above it is
+        returned without the later passes.
+
+    Returns
+    -------
+    tuple of ((k,) ndarray, float) or None
+        The parameters and their cost (of the last pass), or ``None`` when the residuals at the
+        start of a pass are not finite.
+    """
     if math.isfinite(give_up) and len(X) > 2 * LM_COARSE_POINTS:
         idx = subsample(len(X), LM_COARSE_POINTS)
         ws = wn[idx]

@@ -39,7 +39,12 @@ from .mesh.topology import face_components
 from .parameterization.atlas import atlas_corner_uv, pack_charts
 from .parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
 from .parameterization.cut import CutError, CutResult, chart_topology, cut_along_paths, cut_to_disk
-from .parameterization.split import SPLIT_SD_MAX, parameterize_pieces
+from .parameterization.split import (
+    PACK_MIN_AREA_FRACTION,
+    SPLIT_SD_MAX,
+    cut_for_packing,
+    parameterize_pieces,
+)
 from .segmentation.api import segment_with_mode
 from .segmentation.params import resolve_params
 
@@ -158,7 +163,7 @@ def _assign_paths(
 
 
 def _piece(ch: Chart, rows: np.ndarray, res: CutResult, areas: np.ndarray) -> Chart:
-    """A piece of a chart cut for distortion: a chart of its own (id set later)."""
+    """A piece of a chart cut for distortion or packing: a chart of its own (id set later)."""
     faces = ch.faces[rows]
     c = Chart(id=-1, segment=ch.segment, faces=faces, cut=res)
     c.report = {**ch.report, "faces": int(len(faces)), "area": float(areas[faces].sum())}
@@ -245,7 +250,9 @@ def run_pipeline(
         A chart whose best bijective map has a mean symmetric Dirichlet energy above this is
         split along a seam of highest stretch and mapped again
         (:func:`igl_heatseg.parameterization.split.parameterize_pieces`); its pieces are
-        charts of their own (``split_from``), counted in ``charts_cut_for_distortion``.
+        charts of their own (``split_from``), counted in ``charts_cut_for_distortion``.  Long
+        charts (:func:`igl_heatseg.parameterization.split.cut_for_packing`) are cut across,
+        keeping their maps, and counted in ``charts_cut_for_packing``.
 
     Returns
     -------
@@ -311,7 +318,7 @@ def run_pipeline(
 
     # 2. cut and parameterize (a chart cut for distortion becomes several)
     t_cut = t_param = 0.0
-    n_split, split_into = 0, {}
+    n_split, n_pack, split_into = 0, 0, {}
     for ch in charts:
         name = f"chart {ch.id}"
         progress("cut+param", ch.id / max(len(charts), 1))
@@ -389,9 +396,20 @@ def run_pipeline(
                 seconds=secs_cut + time.perf_counter() - t,
             )
             continue
+        n_dist = len(pieces)
+        pieces = [  # long charts cut across for packing, their maps kept
+            (rows[sub_rows], sub, q)
+            for rows, r, p in pieces
+            for sub_rows, sub, q in (
+                cut_for_packing(r, p, name)
+                if areas[ch.faces[rows]].sum() >= PACK_MIN_AREA_FRACTION * areas.sum()
+                else [(np.arange(len(r.F)), r, p)]
+            )
+        ]
         t_param += time.perf_counter() - t
-        if len(pieces) > 1:  # cut for distortion: the chart becomes several (renumbered below)
-            n_split += 1
+        if len(pieces) > 1:  # cut for distortion or packing: several charts (renumbered below)
+            n_split += n_dist > 1
+            n_pack += len(pieces) > n_dist
             split_into[ch.id] = [_piece(ch, rows, r, areas) for rows, r, _ in pieces]
         for c, (_, _, p) in zip(split_into.get(ch.id, [ch]), pieces, strict=True):
             c.param = p
@@ -454,6 +472,7 @@ def run_pipeline(
         "charts_fallback": int(sum(bool(ch.report.get("fallback_used")) for ch in charts)),
         "charts_cut": int(sum(ch.report["cut_length"] > 0 for ch in charts)),
         "charts_cut_for_distortion": n_split,
+        "charts_cut_for_packing": n_pack,
         "energy": energy,
         "cut": cut,
         "cut_paths_input": [list(map(int, p)) for p in cut_paths],

@@ -29,7 +29,9 @@ OUTLINE_PIXELS: int = 120_000
 OUTLINE_MAX_CHARTS: int = 300
 
 
-def rasterize_chart(P: np.ndarray, F: np.ndarray, texel: float, pad: int) -> np.ndarray:
+def rasterize_chart(
+    P: np.ndarray, F: np.ndarray, texel: float, pad: int, loops: list | None = None
+) -> np.ndarray:
     """Conservative pixel mask of a chart's image (see the module docstring).
 
     Parameters
@@ -42,6 +44,8 @@ def rasterize_chart(P: np.ndarray, F: np.ndarray, texel: float, pad: int) -> np.
         Pixel size in the units of ``P``.
     pad : int
         Empty pixels added around the chart (the chart's origin is at pixel ``(pad, pad)``).
+    loops : list of (b,) int64, optional
+        Boundary loops of ``F`` (computed when omitted).
 
     Returns
     -------
@@ -60,7 +64,7 @@ def rasterize_chart(P: np.ndarray, F: np.ndarray, texel: float, pad: int) -> np.
     w = int(np.ceil(ext[0])) + 2 + 2 * pad
     h = int(np.ceil(ext[1])) + 2 + 2 * pad
     M = np.zeros((h, w), dtype=bool)
-    loops = boundary_loops(F)
+    loops = boundary_loops(F) if loops is None else loops
     X = P / texel + pad  # pixel units
     # interior: pixel centres inside the polygon (even-odd over all loops), row by row
     A = np.concatenate([X[lp] for lp in loops])
@@ -107,7 +111,7 @@ def _place(occ: np.ndarray, D: np.ndarray, box: tuple, used: tuple[int, int]):
         return None
     yy, xx = np.nonzero(free)
     side = np.maximum(np.maximum(yy + box[0], used[0]), np.maximum(xx + box[1], used[1]))
-    key = np.lexsort((xx, yy, side))[0]
+    key = int(np.argmin((side.astype(np.int64) * H + yy) * W + xx))  # side, then y, then x
     return int(side[key]), int(yy[key]), int(xx[key])
 
 
@@ -144,7 +148,6 @@ def pack_outlines(
     >>> bool(np.all(span < 2.1))
     True
     """
-    k = len(local)
     pixels = OUTLINE_PIXELS if pixels is None else pixels
     area = np.array([np.prod(np.maximum(P.max(axis=0), 1e-300)) for P in local])
     texel = float(np.sqrt(area.sum() / pixels))
@@ -155,17 +158,35 @@ def pack_outlines(
     for P, F in zip(local, faces, strict=True):
         rot = []
         Q = P
+        loops = boundary_loops(F)
         for _ in range(4):
             Q = Q - Q.min(axis=0)
-            R = rasterize_chart(Q, F, texel, pad)
+            R = rasterize_chart(Q, F, texel, pad, loops)
             D = ndimage.binary_dilation(R, np.ones((3, 3), bool), iterations=g) if g else R
             rows, cols = np.nonzero(R)
             rot.append((R, D, (int(rows.max()) + 1, int(cols.max()) + 1)))
             Q = Q @ quarter
         masks.append(rot)
-    order = np.argsort(-np.array([m[0][0].sum() for m in masks]), kind="stable")
     side0 = int(np.ceil(np.sqrt(sum(m[0][1].sum() for m in masks) / 0.5)))
     side0 = max(side0, max(max(m[0][1].shape) for m in masks) + 1)
+    best = None
+    for order in _orders(masks):
+        got = _layout(masks, order, side0, texel, pad)
+        if best is None or got[2] < best[2]:
+            best = got
+    return best[0], best[1]
+
+
+def _orders(masks: list) -> list:
+    """Placement orders tried: by pixel area, largest first.  (Also trying longest side first
+    changed no fill on iron, fandisk, rocker-arm, abc_00007974_5: not worth its time.)"""
+    area = np.array([m[0][0].sum() for m in masks])
+    return [np.argsort(-area, kind="stable")]
+
+
+def _layout(masks: list, order: np.ndarray, side0: int, texel: float, pad: int):
+    """Place the charts in ``order``; ``(offsets, turns, side in pixels)``."""
+    k = len(masks)
     while True:
         occ = np.zeros((side0, side0), dtype=bool)
         used = (0, 0)
@@ -186,5 +207,5 @@ def pack_outlines(
             offsets[i] = ((x + pad) * texel, (y + pad) * texel)
             turns[i] = q
         else:
-            return offsets, turns
+            return offsets, turns, max(used)
         side0 = int(side0 * 1.3) + 1

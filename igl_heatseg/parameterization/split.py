@@ -14,6 +14,11 @@ through its region of highest stretch, and each piece is mapped again (recursive
    as the automatic disk cutting of :mod:`~.cut` follows short paths): the second avoids the
    first and ends at least a quarter of the boundary length away from it;
 3. the chord ``b1 -> v* -> b2`` splits the disk into two disks (the faces on either side).
+
+:func:`cut_for_packing` cuts a long chart (a strip, e.g. the side of a ring) straight across
+its length, and halves a chart that fills its rectangle badly (a ring cut open), into pieces
+that keep its map: a strip of aspect ratio ``a`` alone caps the fill of a square atlas at
+``1 / a``.
 """
 
 from __future__ import annotations
@@ -37,6 +42,12 @@ __all__ = [
     "SPLIT_SD_MAX",
     "SPLIT_MAX_DEPTH",
     "SPLIT_MIN_FACES",
+    "split_for_packing",
+    "cut_for_packing",
+    "PACK_MAX_ASPECT",
+    "PACK_PIECE_ASPECT",
+    "PACK_MIN_BOX_FILL",
+    "PACK_MIN_AREA_FRACTION",
 ]
 
 log = logging.getLogger(__name__)
@@ -320,3 +331,198 @@ def _area(res: CutResult) -> float:
         0.5
         * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
     )
+
+
+#: A chart whose map's minimum-area rectangle is longer than this times its width, and whose
+#: area is at least :data:`PACK_MIN_AREA_FRACTION` of the mesh's, is cut across its length for
+#: packing (a long strip alone caps the fill of a square atlas at 1 / aspect).
+PACK_MAX_ASPECT: float = 4.0
+
+#: Aspect ratio of the pieces of a chart cut for packing (at most).
+PACK_PIECE_ASPECT: float = 2.0
+
+#: A chart filling less than this of its minimum-area rectangle is halved for packing.
+PACK_MIN_BOX_FILL: float = 0.45
+
+#: Only charts at least this fraction of the mesh's area are cut for packing (small strips
+#: pack well among the other charts).
+PACK_MIN_AREA_FRACTION: float = 0.1
+
+
+def _box(UV: np.ndarray, F: np.ndarray):
+    """Minimum-area rectangle of a piece: rotated coordinates (all rows), min, extent, fill."""
+    from .atlas import _rotate, min_area_rotation
+
+    used = np.unique(F)
+    Q = np.zeros((len(UV), 2))
+    Q[used] = _rotate(UV[used], min_area_rotation(UV[used]))
+    lo, ext = Q[used].min(axis=0), np.ptp(Q[used], axis=0)
+    d1, d2 = UV[F[:, 1]] - UV[F[:, 0]], UV[F[:, 2]] - UV[F[:, 0]]
+    area = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]).sum()
+    return Q, lo, ext, area / max(float(ext[0] * ext[1]), 1e-300)
+
+
+def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int) -> list | None:
+    """``n`` slices across the long axis (faces by centroid, strays merged), or ``None`` when
+    one is not a disk."""
+    axis = int(np.argmax(ext))
+    c = Q[F].mean(axis=1)[:, axis]
+    k = np.clip(((c - lo[axis]) / ext[axis] * n).astype(np.int64), 0, n - 1)
+    k = _merge_strays(F, k)
+    pieces = [p for p in (np.flatnonzero(k == i) for i in range(n)) if len(p)]
+    for p in pieces:
+        if not chart_topology(F[p], name="piece").is_disk:
+            return None
+    return pieces
+
+
+def split_for_packing(
+    UV: np.ndarray, F: np.ndarray, max_aspect: float = PACK_MAX_ASPECT, depth: int = 3
+) -> list | None:
+    """Cut a chart that packs badly into pieces that pack well, by straight cuts in the map.
+
+    A long chart (minimum-area rectangle more than ``max_aspect`` times as long as wide) is
+    cut across its length into pieces of aspect ratio about :data:`PACK_PIECE_ASPECT`; a chart
+    that fills less than :data:`PACK_MIN_BOX_FILL` of its rectangle (a C-shaped chart, e.g. a
+    ring cut open) is halved across its length, recursively (``depth`` levels), as long as
+    that helps.  Faces go to the piece holding their centroid (stray faces join a neighbour).
+
+    Parameters
+    ----------
+    UV : (n, 2) float64
+        A bijective map (``NaN`` allowed for rows ``F`` does not use).
+    F : (m, 3) int64
+        Disk triangulation.
+    max_aspect : float
+        Aspect ratio above which a chart is cut across.
+    depth : int
+        Halving levels for charts that fill their rectangle badly.
+
+    Returns
+    -------
+    list of (m_i,) int64 or None
+        Face indices of the pieces (each a disk), ``None`` when the chart is left whole.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x, y = np.meshgrid(np.arange(21.0), np.arange(3.0))
+    >>> UV = np.stack([x.ravel(), y.ravel()], 1)  # a 20 x 2 strip
+    >>> i = np.arange(63).reshape(3, 21)[:-1, :-1].ravel()
+    >>> F = np.concatenate([np.stack([i, i + 1, i + 22], 1), np.stack([i, i + 22, i + 21], 1)])
+    >>> [len(p) for p in split_for_packing(UV, F)]
+    [16, 16, 16, 16, 16]
+    """
+    F = np.asarray(F, dtype=np.int64)
+    UV = np.asarray(UV, dtype=np.float64)
+    Q, lo, ext, fill = _box(UV, F)
+    if not ext.min() > 0:
+        return None
+    if ext.max() > max_aspect * ext.min():
+        return _slices(F, Q, lo, ext, int(np.ceil(ext.max() / ext.min() / PACK_PIECE_ASPECT)))
+    if fill >= PACK_MIN_BOX_FILL or depth <= 0 or len(F) < 2 * SPLIT_MIN_FACES:
+        return None
+    halves = _slices(F, Q, lo, ext, 2)
+    if halves is None or len(halves) < 2:
+        return None
+    fills = [_box(UV, F[h])[3] for h in halves]
+    if min(fills) <= fill:  # halving did not help
+        return None
+    out = []
+    for h, f in zip(halves, fills, strict=True):
+        sub = split_for_packing(UV, F[h], max_aspect, depth - 1) if f < PACK_MIN_BOX_FILL else None
+        out += [h] if sub is None else [h[p] for p in sub]
+    return out
+
+
+def _merge_strays(F: np.ndarray, k: np.ndarray, rounds: int = 4) -> np.ndarray:
+    """Faces of a piece outside its largest face component join a neighbouring piece (a
+    jagged boundary leaves a few faces across a straight cut)."""
+    topo = edge_topology(F)
+    ef = topo.EF[topo.edge_face_count == 2]
+    m = len(F)
+    for _ in range(rounds):
+        same = k[ef[:, 0]] == k[ef[:, 1]]
+        A = sp.csr_matrix((np.ones(int(same.sum())), (ef[same, 0], ef[same, 1])), shape=(m, m))
+        _, comp = connected_components(A, directed=False)
+        size = np.bincount(comp)
+        big = np.zeros(k.max() + 1, dtype=np.int64)  # size of each piece's largest component
+        np.maximum.at(big, k, size[comp])
+        stray = size[comp] < big[k]
+        if not stray.any():
+            break
+        for a, b in ((0, 1), (1, 0)):  # a stray face takes a neighbour's piece
+            e = ~same & stray[ef[:, a]]
+            k[ef[e, a]] = k[ef[e, b]]
+    return k
+
+
+def cut_for_packing(res: CutResult, param, name: str = "chart") -> list:
+    """Cut a long chart for packing, keeping its map (restricted to every piece).
+
+    Parameters
+    ----------
+    res : CutResult
+        A disk chart.
+    param : ChartParam
+        Its (bijective) map, ``param.UV`` indexing ``res.V``.
+    name : str
+        Chart name for messages.
+
+    Returns
+    -------
+    list of (faces, CutResult, ChartParam)
+        As :func:`parameterize_pieces`; one entry (the chart itself) when it is not cut.
+        Every piece is certified again; ``attempts`` gets a ``"cut for packing"`` record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.parameterization.chart import parameterize_chart
+    >>> from igl_heatseg.parameterization.cut import cut_to_disk
+    >>> x, y = np.meshgrid(np.arange(21.0), np.arange(3.0))
+    >>> V = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    >>> i = np.arange(63).reshape(3, 21)[:-1, :-1].ravel()
+    >>> F = np.concatenate([np.stack([i, i + 1, i + 22], 1), np.stack([i, i + 22, i + 21], 1)])
+    >>> res = cut_to_disk(V, F)
+    >>> out = cut_for_packing(res, parameterize_chart(res.V, res.F))
+    >>> len(out), all(q.bijective for _, _, q in out)
+    (5, True)
+    """
+    import dataclasses
+
+    from .bijectivity import certify_map
+    from .distortion import distortion
+
+    whole = [(np.arange(len(res.F)), res, param)]
+    if not param.bijective:
+        return whole
+    pieces = split_for_packing(param.UV, res.F)
+    if pieces is None:
+        return whole
+    out = []
+    for faces in pieces:
+        sub = restrict_cut(res, faces)
+        UV = param.UV[np.unique(res.F[faces])]
+        cert = certify_map(UV, sub.F, name=name)
+        if not cert.bijective:  # cannot happen for a piece of a bijective map; be safe
+            return whole
+        rec = {"method": "cut for packing", "pieces": len(pieces), "seconds": 0.0}
+        out.append(
+            (
+                faces,
+                sub,
+                dataclasses.replace(
+                    param,
+                    UV=UV,
+                    bijective=True,
+                    flips=0,
+                    overlaps=0,
+                    distortion=distortion(sub.V, sub.F, UV),
+                    certificate=cert,
+                    attempts=[*param.attempts, rec],
+                ),
+            )
+        )
+    log.info("%s: cut for packing into %d pieces", name, len(out))
+    return out

@@ -167,3 +167,79 @@ def test_evaluate_labels_reports_boundary_and_types(box):
     assert d["boundary_ratio"] == pytest.approx(22 / 24) and d["type_accuracy"] == ev.type_accuracy
     with pytest.raises(MeshError, match="types"):
         evaluate_labels(V, F, pred, side, pred_types=["plane"] * 4, truth_types=true_types)
+
+
+# --------------------------------------------------------------------------------------------
+# igl-heatseg evaluate: --types, report.json beside --pred, robust mode's own surfaces
+# --------------------------------------------------------------------------------------------
+
+
+def _evaluate(argv, capsys):
+    import json
+
+    from igl_heatseg.cli import main
+
+    code = main(["evaluate", *argv])
+    out = capsys.readouterr()
+    return code, (json.loads(out.out) if "--json" in argv and code == 0 else out.out + out.err)
+
+
+@pytest.fixture()
+def cube_files(tmp_path, box):
+    import igl
+
+    V, F, _, side = box
+    mesh = tmp_path / "part.obj"
+    igl.write_triangle_mesh(str(mesh), V, F)
+    truth = tmp_path / "part.facelabels.txt"
+    truth.write_text("\n".join(map(str, side)) + "\n")
+    (tmp_path / "part.surface_types.txt").write_text(
+        "".join(f"{k} {t}\n" for k, t in enumerate(["Plane"] * 5 + ["Cylinder"]))
+    )
+    return tmp_path, mesh, truth, side
+
+
+def test_cli_types_from_report_beside_pred_and_default_types_file(cube_files, capsys):
+    import json
+
+    tmp, mesh, truth, side = cube_files
+    pred = tmp / "seg"
+    pred.mkdir()
+    (pred / "labels.txt").write_text("\n".join(map(str, side)) + "\n")
+    code, d = _evaluate([str(mesh), "--truth", str(truth), "--pred", str(pred), "--json"], capsys)
+    assert code == 0 and d["type_accuracy"] is None and d["boundary_ratio"] == pytest.approx(1)
+    assert d["types_file"] == str(tmp / "part.surface_types.txt")
+    code, text = _evaluate([str(mesh), "--truth", str(truth), "--pred", str(pred)], capsys)
+    assert "boundary length ratio" in text and "prediction has no surface types" in text
+    report = {"surfaces": [{"segment": k, "type": "plane"} for k in range(6)]}
+    (pred / "report.json").write_text(json.dumps(report))
+    code, d = _evaluate([str(mesh), "--truth", str(truth), "--pred", str(pred), "--json"], capsys)
+    assert code == 0 and d["type_accuracy"] == pytest.approx(5 / 6)  # +z is the cylinder
+    # the labels file itself as --pred finds the report beside it; --types overrides
+    planes = tmp / "planes.txt"
+    planes.write_text("".join(f"{k} Plane\n" for k in range(6)))
+    argv = [str(mesh), "--truth", str(truth), "--pred", str(pred / "labels.txt")]
+    code, d = _evaluate([*argv, "--types", str(planes), "--json"], capsys)
+    assert code == 0 and d["type_accuracy"] == pytest.approx(1.0)
+    code, text = _evaluate([*argv, "--types", str(planes)], capsys)
+    assert "surface type accuracy, area" in text and "1.0000" in text
+    # too few types for the true labels, or a report without types: exit 2
+    planes.write_text("0 Plane\n")
+    code, text = _evaluate([*argv, "--types", str(planes)], capsys)
+    assert code == 2 and "1 surface types for 6 labels" in text
+    (pred / "report.json").write_text(json.dumps({"surfaces": [{"segment": 0}]}))
+    code, text = _evaluate(argv, capsys)
+    assert code == 2 and "'type'" in text
+
+
+def test_cli_robust_mode_scores_its_own_surface_types(cube_files, capsys):
+    tmp, mesh, truth, side = cube_files
+    planes = tmp / "planes.txt"
+    planes.write_text("".join(f"{k} Plane\n" for k in range(6)))
+    argv = [str(mesh), "--truth", str(truth), "--mode", "robust", "--json"]
+    code, d = _evaluate([*argv, "--types", str(planes)], capsys)
+    assert code == 0 and d["n_segments"] == 6
+    assert d["type_accuracy"] == pytest.approx(1.0) and d["boundary_ratio"] == pytest.approx(1.0)
+    # the paper mode fits no surfaces: no type accuracy, the boundary ratio all the same
+    code, d = _evaluate([str(mesh), "--truth", str(truth), "--mode", "paper", "--json"], capsys)
+    assert code == 0 and d["type_accuracy"] is None and d["boundary_ratio"] == pytest.approx(1.0)

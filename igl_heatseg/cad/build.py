@@ -73,6 +73,10 @@ REVOLVED_SEW_FRACTION = 0.45
 MOVE_DEV_FACTOR = 2.0
 MOVE_EDGE_FRACTION = 0.5
 
+#: Widest sewing tolerance tried when a closed part keeps free edges, in mean edge lengths
+#: (wider would merge distinct mesh vertices).
+SEW_MAX_EDGE = 0.5
+
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
 MIN_TOL_REL = 1e-7
@@ -549,7 +553,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                                               progress)
         t = time.perf_counter()
         progress("sew", 0.0)
-        shape, info = assemble(faces, sew_tol, closed)
+        shape, info = assemble(faces, sew_tol, closed, max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
+        sew_tol = info["sew_tol"]
         timings["sew"] = time.perf_counter() - t
         message = "" if info["solid"] or not closed else "closed mesh but the shell is open"
         faceted_model = False

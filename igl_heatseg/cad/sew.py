@@ -25,6 +25,10 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["assemble"]
 
+#: Sewing tolerance factors tried in turn while a closed part keeps free edges (ShapeFix can
+#: split a closed edge next to its vertex; the sliver needs a wider sewing).
+RETRY_FACTORS = (1.0, 2.0, 4.0)
+
 
 def _shells(shape) -> list:
     out, ex = [], TopExp_Explorer(shape, TopAbs_SHELL)
@@ -81,7 +85,20 @@ def _solid(shell):
     return solid
 
 
-def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
+def _sew(faces, tol: float, unify: bool):
+    sew = BRepBuilderAPI_Sewing(tol)
+    for f in faces:
+        sew.Add(f)
+    sew.Perform()
+    fix = ShapeFix_Shape(sew.SewedShape())
+    fix.SetPrecision(tol * 1e-2)
+    fix.SetMaxTolerance(tol)
+    fix.Perform()
+    return _unify(fix.Shape()) if unify else fix.Shape()
+
+
+def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True,
+             max_tol: float | None = None):
     """Sew faces into a shell (and a solid when ``closed`` and the shell closes).
 
     Parameters
@@ -93,6 +110,9 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
         Whether the mesh was closed (then a solid is attempted).
     unify : bool
         Run ``ShapeUpgrade_UnifySameDomain``.
+    max_tol : float, optional
+        When a closed mesh's faces leave free edges, sew again with the tolerance multiplied
+        by :data:`RETRY_FACTORS`, up to this.
 
     Returns
     -------
@@ -100,21 +120,18 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True):
         A solid (a compound of solids for several closed shells), a shell, or the sewn
         compound.
     info : dict
-        ``free_edges_after_sewing``, ``solid`` (bool).
+        ``free_edges_after_sewing``, ``solid`` (bool), ``sew_tol`` (the tolerance used).
     """
-    sew = BRepBuilderAPI_Sewing(float(sew_tol))
-    for f in faces:
-        sew.Add(f)
-    sew.Perform()
-    shape = sew.SewedShape()
-    fix = ShapeFix_Shape(shape)
-    fix.SetPrecision(float(sew_tol) * 1e-2)
-    fix.SetMaxTolerance(float(sew_tol))
-    fix.Perform()
-    shape = fix.Shape()
-    if unify:
-        shape = _unify(shape)
-    info = {"free_edges_after_sewing": count_free_edges(shape), "solid": False}
+    for factor in RETRY_FACTORS:
+        tol = float(sew_tol) * factor
+        if max_tol is not None:
+            tol = max(min(tol, float(max_tol)), float(sew_tol))
+        shape = _sew(faces, tol, unify)
+        free = count_free_edges(shape)
+        if free == 0 or not closed or max_tol is None or tol >= max_tol:
+            break
+        logger.info("sewing at %.3g left %d free edges; retrying wider", tol, free)
+    info = {"free_edges_after_sewing": free, "solid": False, "sew_tol": tol}
     shells = _shells(shape)
     if not shells:  # sewing one face returns the face
         shells = [_shell_of(faces_of(shape))]

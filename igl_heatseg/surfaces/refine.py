@@ -93,6 +93,10 @@ MIN_EXTRA_SAMPLES = {"plane": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus":
 #: than this share of the segment's area does not explain the segment.
 NORMAL_OFF_SHARE = 0.05
 
+#: A segment's fit may leave out faces off its surface up to this share of its area (a
+#: boundary one triangle off); beyond it the segment is not explained.
+TRIM_SHARE = 0.05
+
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
 
@@ -212,6 +216,8 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
     s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
+    if not s.is_analytic and s.rms <= tol and len(faces) >= 2 * MIN_REGION_FACES:
+        s = _trimmed_fit(V, F, faces, tol, allowed, W, s) or s
     if s.is_analytic:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
         # three (radius, height) profile points, which a torus always passes through. The face
@@ -223,6 +229,25 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
             return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
                            max_dev=s.max_dev, area=float(A.sum()))
     return s
+
+
+def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface) -> Surface | None:
+    """A segment whose best surface is within tolerance in RMS but not in its largest deviation
+    usually holds a few faces of a neighbour (a boundary a triangle off): fit without the faces
+    whose corners are off that surface, when they are at most TRIM_SHARE of the area. The
+    boundary moves then hand those faces to the neighbour they lie on."""
+    P, N, w = vertex_samples(V, F, faces, W)
+    loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
+    if not loose.is_analytic:
+        return None
+    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    keep = d <= GROW_TOL * tol
+    A = face_areas(V, F[faces])
+    if A[~keep].sum() > TRIM_SHARE * A.sum() or keep.sum() < 2 * MIN_REGION_FACES:
+        return None
+    P, N, w = vertex_samples(V, F, faces[keep], W)
+    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
+    return s if s.is_analytic else None
 
 
 def _rms_to(V, F, faces, s: Surface) -> float:

@@ -80,9 +80,10 @@ def add_segment_arguments(p: argparse.ArgumentParser) -> None:
         "--mode",
         choices=MODES,
         default="paper",
-        help="paper: the paper's method, faithful (default); robust: denoised normals, "
-        "curvature-class seeds, part-relative eps and primitive merging, for noisy scans "
-        "and blends (adds a primitive type per segment to report.json)",
+        help="paper: the paper's method, faithful (default); robust: the heat segmentation on "
+        "denoised normals refined by surface fits (segments split, merged and their "
+        "boundaries moved until each is one plane, cylinder, cone, sphere, torus or freeform "
+        "face; report.json gets a `surfaces` list, segmented.ply a per-face surface_type)",
     )
     p.add_argument(
         "--theta",

@@ -34,7 +34,14 @@ from ..errors import MeshError
 from .bijectivity import Certificate
 from .distortion import distortion
 from .eigenmap import hessian_map
-from .fallback import REPAIR_MAX_SD_RATIO, SLIM_ITERATIONS, repair_map, slim_guarded, tutte_map
+from .fallback import (
+    REPAIR_MAX_SD_RATIO,
+    SLIM_ITERATIONS,
+    SLIM_STOP_AFTER_BAD,
+    repair_map,
+    slim_guarded,
+    tutte_map,
+)
 from .prepare import (
     BLAS_THREADS,
     PreparedChart,
@@ -358,7 +365,7 @@ def _tutte_attempt() -> Attempt:
     return Attempt("tutte", lambda st: not st.bijective(), run)
 
 
-def _slim_attempt(iterations: int, fixed: bool) -> Attempt:
+def _slim_attempt(iterations: int, fixed: bool, stall: float | None = None) -> Attempt:
     """Guarded SLIM from the bijective Tutte map: free boundary, or (only when no free-boundary
     iterate was bijective) the boundary held on the circle."""
     meth = "tutte+slim-fixed" if fixed else "tutte+slim"
@@ -374,7 +381,7 @@ def _slim_attempt(iterations: int, fixed: bool) -> Attempt:
         c, start = st.chart, st.current
         bnd = c.boundary if fixed else None
         UV, cert, acc, good = slim_guarded(
-            c.V, c.F, start.UV, iterations, st.name, bnd, loops=[c.boundary]
+            c.V, c.F, start.UV, iterations, st.name, bnd, loops=[c.boundary], stall=stall
         )
         record = {
             "method": meth,
@@ -410,7 +417,15 @@ def _hessian_slim_attempt(iterations: int) -> Attempt:
     def run(st: _State) -> dict:
         c, start = st.chart, st.current
         UV, cert, acc, good = slim_guarded(
-            c.V, c.F, start.UV, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+            c.V,
+            c.F,
+            start.UV,
+            iterations,
+            st.name,
+            None,
+            loops=[c.boundary],
+            stall=SLIM_STALL,
+            give_up=SLIM_STOP_AFTER_BAD,
         )
         meth = f"{start.method}+slim"
         record = {"method": meth, "accepted_iterations": acc, "bijective_iterations": good}
@@ -443,7 +458,15 @@ def _tutte_slim_candidate_attempt(iterations: int) -> Attempt:
         if not cert_t.bijective:
             return {**record, **cert_t.summary()}
         UV, cert, acc, good = slim_guarded(
-            c.V, c.F, UVt, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+            c.V,
+            c.F,
+            UVt,
+            iterations,
+            st.name,
+            None,
+            loops=[c.boundary],
+            stall=SLIM_STALL,
+            give_up=SLIM_STOP_AFTER_BAD,
         )
         record.update(accepted_iterations=acc, bijective_iterations=good)
         if acc > 0:
@@ -470,7 +493,15 @@ def _start_attempt(iterations: int) -> Attempt:
         record["sym_dirichlet"] = st.offer(Candidate(UV0, cert0, "start", lam)).sym_dirichlet
         if iterations > 0 and record["sym_dirichlet"] > QUALITY_TRY_ABOVE:
             UV, cert, acc, good = slim_guarded(
-                c.V, c.F, UV0, iterations, st.name, None, loops=[c.boundary], stall=SLIM_STALL
+                c.V,
+                c.F,
+                UV0,
+                iterations,
+                st.name,
+                None,
+                loops=[c.boundary],
+                stall=SLIM_STALL,
+                give_up=SLIM_STOP_AFTER_BAD,
             )
             if acc > 0:
                 cand = st.offer(Candidate(UV, cert, "start+slim", lam))
@@ -533,7 +564,11 @@ def attempt_plan(
         plan.append(_repair_attempt(fallback))
     plan.append(_tutte_attempt())
     if fallback == "tutte+slim":
-        plan += [_slim_attempt(slim_iterations, False), _slim_attempt(slim_iterations, True)]
+        stall = SLIM_STALL if choose == "quality" else None
+        plan += [
+            _slim_attempt(slim_iterations, False, stall),
+            _slim_attempt(slim_iterations, True, stall),
+        ]
     if choose == "quality":
         plan += [
             _hessian_slim_attempt(slim_iterations),

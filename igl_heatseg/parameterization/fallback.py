@@ -341,6 +341,7 @@ def slim_guarded(
     bnd: np.ndarray | None = None,
     loops: list[np.ndarray] | None = None,
     stall: float | None = None,
+    give_up: int | None = None,
 ) -> tuple[np.ndarray, Certificate | None, int, int]:
     """SLIM one iteration at a time from a bijective start; keep the last bijective iterate.
 
@@ -359,7 +360,9 @@ def slim_guarded(
     constraint, :data:`SLIM_SOFT_P`) at its start positions.  With ``stall``, SLIM also stops
     at the first bijective iterate whose symmetric Dirichlet energy is less than ``stall``
     times its own value below the previous bijective iterate's (converged; started from a
-    Hessian map, SLIM reaches 4.0x within a few iterations).
+    Hessian map, SLIM reaches 4.0x within a few iterations).  With ``give_up``, it stops
+    after that many non-bijective iterates when none was bijective yet (an optional
+    candidate: iron.ply chart 6 ran 30 such iterations, 2.3 s, for nothing).
 
     Early stop: after :data:`SLIM_STOP_AFTER_BAD` consecutive non-bijective iterates that
     follow a bijective one.  On the 20 fallback charts, once an iterate had been bijective,
@@ -417,5 +420,7 @@ def slim_guarded(
         else:
             bad_run += 1
             if accepted > 0 and bad_run >= SLIM_STOP_AFTER_BAD:
+                break
+            if accepted == 0 and give_up is not None and bad_run >= give_up:
                 break
     return best, best_cert, accepted, good

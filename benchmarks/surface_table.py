@@ -48,6 +48,7 @@ import concurrent.futures
 import datetime
 import functools
 import json
+import math
 import multiprocessing
 import platform
 import shlex
@@ -225,15 +226,43 @@ def bars(r: dict) -> dict:
     )
 
 
-def run_method(method: str, folder: Path, entry: dict, part: dict, args) -> dict:
-    """One method on one part: the scored row (``error`` set and metrics None on failure)."""
+def _base(method: str, entry: dict, part: dict | None = None) -> dict:
     base = {k: entry.get(k) for k in ("name", "family", "seed", "tessellation", "noise")}
-    base.update(method=method, faces=len(part["F"]), true_faces=int(part["labels"].max()) + 1)
+    base.update(method=method, faces=entry.get("faces"), true_faces=entry.get("true_faces"))
+    if part is not None:
+        base.update(faces=len(part["F"]), true_faces=int(part["labels"].max()) + 1)
+    return base
+
+
+def _remaining(args) -> float:
+    """Seconds left before ``args.deadline`` (epoch seconds; ``inf`` without one)."""
+    deadline = getattr(args, "deadline", None)
+    return math.inf if deadline is None else deadline - time.time()
+
+
+def unfinished_row(method: str, entry: dict, why: str = "deadline") -> dict:
+    """The row of a task the deadline stopped: left out of every aggregate."""
+    return dict(_base(method, entry), unfinished=why, error=None, seconds=None)
+
+
+def run_method(method: str, folder: Path, entry: dict, part: dict, args) -> dict:
+    """One method on one part: the scored row (``error`` set and metrics None on failure;
+    ``unfinished`` set when ``args.deadline`` passed before or during the run)."""
+    base = _base(method, entry, part)
+    left = _remaining(args)
+    if left <= 0:
+        return unfinished_row(method, entry)
     try:
         if method in ("paper", "robust"):
-            labels, types, seconds, extra = run_cli(
-                folder / entry["obj"], method, args.cli, args.timeout
-            )
+            timeout = min(args.timeout, left)
+            try:
+                labels, types, seconds, extra = run_cli(
+                    folder / entry["obj"], method, args.cli, timeout
+                )
+            except subprocess.TimeoutExpired:
+                if timeout < args.timeout:  # stopped by the deadline, not by its own timeout
+                    return unfinished_row(method, entry)
+                raise
         elif method in ("cgal", "cgal-spacing"):
             labels, types, seconds, extra = run_cgal(part["V"], part["F"], method != "cgal")
         else:
@@ -309,6 +338,17 @@ def targets(g: dict) -> dict:
     }
 
 
+def common_rows(rows: list[dict], methods: list[str]) -> tuple[list[dict], int]:
+    """The rows of the parts every method finished (scored or failed, not stopped by the
+    deadline), and how many such parts there are."""
+    done: dict[str, set] = {}
+    for r in rows:
+        if not r.get("unfinished"):
+            done.setdefault(r["name"], set()).add(r["method"])
+    names = {n for n, ms in done.items() if set(methods) <= ms}
+    return [r for r in rows if r["name"] in names and not r.get("unfinished")], len(names)
+
+
 def aggregate(rows: list[dict], methods: list[str]) -> dict:
     """Per method: means, pass counts per bar, targets; and the same by noise level, plus the
     purity/coverage pass counts by tessellation and by noise."""
@@ -352,6 +392,14 @@ def markdown(meta: dict, rows: list[dict], agg: dict, methods: list[str]) -> str
     lines = [
         f"# Surface-recovery table: {meta['set']} set ({meta['parts']} parts)",
         "",
+        *(
+            [
+                f"- **finished: {meta['parts_scored']} of {meta['parts']} parts by every method "
+                f"(deadline {meta.get('deadline_utc')}); the aggregates cover those parts only**"
+            ]
+            if meta.get("parts_scored", meta["parts"]) != meta["parts"]
+            else []
+        ),
         f"- date: {meta['date']}; wall time of the table {meta.get('seconds', '?')} s "
         f"with --jobs {meta.get('jobs', 1)}",
         f"- machine: {meta['machine']}",
@@ -434,6 +482,12 @@ def markdown(meta: dict, rows: list[dict], agg: dict, methods: list[str]) -> str
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
+        if r.get("unfinished"):
+            lines.append(
+                f"| {r['name']} | {_f(r['faces'], '{}')} | {_f(r['true_faces'], '{}')} "
+                f"| {r['method']} | not finished ({r['unfinished']}) | | | | | | |"
+            )
+            continue
         if r.get("error"):
             lines.append(
                 f"| {r['name']} | {r['faces']} | {r['true_faces']} | {r['method']} "
@@ -497,11 +551,15 @@ def _cached_part(folder: str, obj: str, name: str) -> dict:
 
 def _task(method: str, folder: Path, entry: dict, args) -> dict:
     """One (part, method) in a worker process (``--jobs`` > 1)."""
+    if _remaining(args) <= 0:
+        return unfinished_row(method, entry)
     part = _cached_part(str(folder), entry["obj"], entry["name"])
     return run_method(method, folder, entry, part, args)
 
 
 def _status(r: dict) -> str:
+    if r.get("unfinished"):
+        return f"not finished ({r['unfinished']})"
     if r.get("error"):
         return f"failed: {r['error']}"
     return (
@@ -510,15 +568,29 @@ def _status(r: dict) -> str:
     )
 
 
-def run_all(entries: list[dict], folder: Path, args) -> list[dict]:
-    """Every method on every part; rows part by part, methods in ``args.methods`` order."""
+def run_all(entries: list[dict], folder: Path, args, log: Path | None = None) -> list[dict]:
+    """Every method on every part; rows part by part, methods in ``args.methods`` order.
+
+    Each row is also appended to ``log`` (JSON lines) as soon as it is scored, so a run that
+    is stopped still leaves its rows (``--from-rows`` rebuilds the report from them).
+    """
     n = len(entries)
+
+    def keep(r: dict) -> dict:
+        if log is not None:
+            with log.open("a") as fh:
+                fh.write(json.dumps(_json_safe(r)) + "\n")
+        return r
+
     if args.jobs <= 1:
         rows = []
         for i, entry in enumerate(entries):
+            if _remaining(args) <= 0:
+                rows += [keep(unfinished_row(m, entry)) for m in args.methods]
+                continue
             part = load_part(folder, entry)
             for m in args.methods:
-                r = run_method(m, folder, entry, part, args)
+                r = keep(run_method(m, folder, entry, part, args))
                 rows.append(r)
                 print(f"[{i + 1}/{n}] {entry['name']} {m}: {_status(r)}", flush=True)
         return rows
@@ -538,9 +610,18 @@ def run_all(entries: list[dict], folder: Path, args) -> list[dict]:
                 r = {k: entry.get(k) for k in ("name", "family", "seed", "tessellation", "noise")}
                 r.update(method=m, faces=entry.get("faces"), true_faces=entry.get("true_faces"))
                 r.update(error=f"worker: {type(exc).__name__}: {exc}"[:300], seconds=None)
-            results[i, j] = r
+            results[i, j] = keep(r)
             print(f"[{len(results)}/{len(tasks)}] {entry['name']} {m}: {_status(r)}", flush=True)
     return [results[t] for t in tasks]
+
+
+def parse_deadline(text: str) -> float:
+    """Epoch seconds of ``HH:MM`` (UTC, today) or of ``+SECONDS`` (from now)."""
+    if text.startswith("+"):
+        return time.time() + float(text[1:])
+    now = datetime.datetime.now(datetime.timezone.utc)
+    hh, mm = (int(x) for x in text.split(":"))
+    return now.replace(hour=hh, minute=mm, second=0, microsecond=0).timestamp()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -561,7 +642,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--commit", default=None, help="commit to report (default: git describe of igl_heatseg)"
     )
+    ap.add_argument(
+        "--deadline",
+        default=None,
+        metavar="HH:MM",
+        help="UTC time (today; or +SECONDS from now) after which no task starts and running "
+        "CLI runs are stopped; "
+        "their rows are 'not finished' and the aggregates cover the parts every method finished",
+    )
+    ap.add_argument(
+        "--from-rows",
+        default=None,
+        metavar="JSONL",
+        help="no runs: rebuild the report from the rows a (stopped) run appended to OUT.rows.jsonl",
+    )
     args = ap.parse_args(argv)
+    deadline_utc = args.deadline
+    if args.deadline:
+        args.deadline = parse_deadline(args.deadline)
     args.cli = shlex.split(args.cli) if args.cli else default_cli()
     folder, manifest = load_manifest(args.set)
     entries = manifest["parts"]
@@ -576,7 +674,20 @@ def main(argv: list[str] | None = None) -> int:
     pkg = Path(igl_heatseg.__file__).parent
     t_all = time.perf_counter()
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    rows = run_all(entries, folder, args)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.from_rows:
+        by_key = {(r["name"], r["method"]): r for r in map(json.loads, open(args.from_rows))}
+        rows = [
+            by_key.get((e["name"], m)) or unfinished_row(m, e, "not run")
+            for e in entries
+            for m in args.methods
+        ]
+    else:
+        log = out.with_suffix(".rows.jsonl")
+        log.write_text("")
+        rows = run_all(entries, folder, args, log)
+    scored, n_scored = common_rows(rows, args.methods)
     meta = dict(
         set=manifest.get("set", folder.name),
         manifest=str(folder / "manifest.json"),
@@ -589,16 +700,22 @@ def main(argv: list[str] | None = None) -> int:
         igl_heatseg=str(pkg),
         commit=args.commit or commit_of(pkg),
         jobs=args.jobs,
+        deadline_utc=deadline_utc,
+        parts_scored=n_scored,
         seconds=round(time.perf_counter() - t_all, 1),
     )
-    agg = aggregate(rows, args.methods)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if args.from_rows:
+        meta["seconds"] = None
+        meta["rebuilt_from"] = args.from_rows
+    agg = aggregate(scored, args.methods)
     out.with_suffix(".md").write_text(markdown(meta, rows, agg, args.methods))
     out.with_suffix(".json").write_text(
         json.dumps(_json_safe(dict(meta=meta, aggregate=agg, rows=rows)), indent=1) + "\n"
     )
-    print(f"{len(entries)} parts x {len(args.methods)} methods in {meta['seconds']:.0f} s")
+    print(
+        f"{len(entries)} parts x {len(args.methods)} methods in {_f(meta['seconds'], '{:.0f}')} s; "
+        f"{n_scored} parts finished by every method"
+    )
     for m in args.methods:
         a = agg[m]
         print(

@@ -204,3 +204,18 @@ def test_surface_table_runs_in_parallel_workers(tmp_path, capsys):
         md[1].split("## Aggregate")[1].split("s/part")[0]
         == md[2].split("## Aggregate")[1].split("s/part")[0]
     )
+    # a deadline already passed: nothing runs, every row is "not finished", no aggregate part
+    out = tmp_path / "late"
+    argv = [str(tmp_path), "--methods", "robust", "--out", str(out), "--cli", cli]
+    assert st.main([*argv, "--deadline", "+0"]) == 0
+    d = json.loads(out.with_suffix(".json").read_text())
+    assert [r["unfinished"] for r in d["rows"]] == ["deadline", "deadline"]
+    assert d["meta"]["parts_scored"] == 0 and d["aggregate"]["robust"]["parts"] == 0
+    assert "finished: 0 of 2 parts" in out.with_suffix(".md").read_text()
+    # the rows a run appended rebuild its report
+    rebuilt = tmp_path / "rebuilt"
+    log = str((tmp_path / "j1").with_suffix(".rows.jsonl"))
+    argv = [str(tmp_path), "--methods", "robust", "--out", str(rebuilt), "--from-rows", log]
+    assert st.main(argv) == 0
+    d = json.loads(rebuilt.with_suffix(".json").read_text())
+    assert d["aggregate"]["robust"]["passed_all"] == 2 and d["meta"]["parts_scored"] == 2

@@ -159,7 +159,7 @@ def _import_distributed():
     return distributed
 
 
-def _start_client(distributed, client, scheduler, workers, say):
+def _start_client(distributed, client, scheduler, workers):
     """``(client, cluster, owned)``: the given client, one on ``scheduler``, or a LocalCluster."""
     import dask
 
@@ -342,9 +342,13 @@ def run_batch(
             f"{len(meshes) - len(todo)} already complete"
         )
         distributed = _import_distributed()
-        quiet = _quiet()
-        quiet.__enter__()
-        client_, cluster, owned = _start_client(distributed, client, scheduler, workers, prog.say)
+        stack = contextlib.ExitStack()
+        stack.enter_context(_quiet())
+        try:
+            client_, cluster, owned = _start_client(distributed, client, scheduler, workers)
+        except BaseException:
+            stack.close()
+            raise
         try:
             dashboard = _dashboard(client_, local=cluster is not None)
             if owned:
@@ -354,7 +358,13 @@ def run_batch(
             meta["scheduler"] = client_.scheduler.address
             prog.say(
                 f"igl-heatseg batch: {nworkers} worker(s) at {client_.scheduler.address}"
-                + (f"; dashboard {dashboard}" if dashboard else "")
+                + (
+                    f"; dashboard {dashboard}"
+                    if dashboard
+                    else "; no dashboard (pip install bokeh for one)"
+                    if cluster is not None
+                    else ""
+                )
             )
             todo.sort(key=lambda m: -m.path.stat().st_size)  # the largest first
             run_id = uuid.uuid4().hex[:8]
@@ -418,7 +428,7 @@ def run_batch(
                 client_.close()
                 if cluster is not None:
                     cluster.close()
-            quiet.__exit__(None, None, None)
+            stack.close()
     wall = time.perf_counter() - t0
     flush(final=True)
     recs = sorted(records.values(), key=lambda r: r["mesh"])

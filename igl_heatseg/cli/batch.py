@@ -22,6 +22,7 @@ def run(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             workers=args.workers,
             mode=args.mode,
+            options={"repair": True} if args.repair else None,
             memory_limit=args.memory_limit,
             timeout=args.timeout or None,
             force=args.force,
@@ -36,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
 
 def register(subparsers) -> None:
     """Add ``igl-heatseg batch INPUTS... -o OUT [--command] [--mode] [--workers] [--scheduler]
-    [--memory-limit] [--timeout] [--force] [--no-pictures]``."""
+    [--memory-limit] [--timeout] [--repair] [--force] [--no-pictures]``."""
     p = subparsers.add_parser(
         "batch",
         help="process many meshes on Dask (resumable, one summary)",
@@ -87,6 +88,12 @@ def register(subparsers) -> None:
         default=600.0,
         metavar="S",
         help="seconds a mesh may take before it is killed (default 600; 0 for no limit)",
+    )
+    p.add_argument(
+        "--repair",
+        action="store_true",
+        help="repair what exports get wrong instead of refusing the mesh (as for segment and "
+        "run: see `igl-heatseg segment --help`)",
     )
     p.add_argument("--force", action="store_true", help="redo meshes whose output is complete")
     p.add_argument(

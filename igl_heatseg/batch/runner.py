@@ -288,6 +288,16 @@ def run_batch(
     -------
     BatchResult
 
+    Notes
+    -----
+    A LocalCluster starts its workers with ``multiprocessing``'s spawn method, which re-imports
+    the calling script: in a script, call this under ``if __name__ == "__main__":`` (notebooks
+    and the command line need nothing). On a scheduler of your own, set
+    ``distributed.scheduler.allowed-failures`` to 1 there for "a mesh whose worker died is
+    retried once" (environment: ``DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES=1``); Dask's
+    default retries it up to 3 times. Each worker thread runs one mesh at a time in a child of
+    its job server.
+
     Raises
     ------
     ImportError

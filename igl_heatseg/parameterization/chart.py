@@ -16,6 +16,12 @@
 3. ``tutte``: otherwise a mean-value Tutte map (bijective by construction), improved by
    ``tutte+slim`` (free boundary, guarded: the last bijective iterate is kept); only if no
    iterate is bijective, ``tutte+slim-fixed`` (boundary held on the circle).
+4. Quality (``choose="quality"``, the default; issue 13): when the bijective Hessian map's
+   symmetric Dirichlet energy is above :data:`QUALITY_TRY_ABOVE`, ``<hessian>+slim`` (SLIM
+   started from it) and ``tutte+slim`` are computed too (and ``start``/``start+slim`` from a
+   given map); the certified bijective map of lowest energy is kept unless the Hessian map
+   is within :data:`HESSIAN_MARGIN` of it, and it is scaled to the chart's true size (UV area
+   = 3D area).  Every attempt records its ``sym_dirichlet``.
 
 The map is computed on the chart scaled to unit area and scaled back at the end.
 """

@@ -294,10 +294,16 @@ def l_chart(n=6, size=1.0):
     return P[used], remap[F]
 
 
+def inside(poly, p):
+    """Even-odd point-in-polygon test."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
+    x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
+    return bool(np.count_nonzero(cross & (x > p[0])) % 2)
+
+
 def charts_overlap(uvs, faces):
     """Whether any two packed charts overlap: boundary crossings, or one inside another."""
-    from matplotlib.path import Path
-
     from igl_heatseg.mesh.topology import boundary_loops
     from igl_heatseg.parameterization.bijectivity import boundary_self_intersections
 
@@ -311,7 +317,7 @@ def charts_overlap(uvs, faces):
         return True
     for i, (U, lp) in enumerate(zip(uvs, loops, strict=True)):
         for j, W in enumerate(uvs):
-            if i != j and Path(U[lp]).contains_points(W.mean(axis=0, keepdims=True))[0]:
+            if i != j and inside(U[lp], W[faces[j][0]].mean(axis=0)):  # a point of chart j
                 return True
     return False
 

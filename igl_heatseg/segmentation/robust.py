@@ -58,7 +58,7 @@ from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
-from ..surfaces.fit import fit_tolerance
+from ..surfaces.tolerance import vertex_tolerance
 from ..surfaces.refine import refine_segmentation
 from .denoise import BILATERAL_SIGMA_R, bilateral_normals, denoise_vertices
 from .paper import (
@@ -693,7 +693,7 @@ def segment_robust(
     surfaces = None
     if fit_surfaces:
         t = time.perf_counter()
-        ref = refine_segmentation(V, F, labels1, fit_tolerance(V, F), normals_from=W,
+        ref = refine_segmentation(V, F, labels1, vertex_tolerance(V, F), normals_from=W,
                                   progress=progress)
         labels1, k1 = ref.labels, len(ref.surfaces)
         vlab1 = np.zeros(n, dtype=np.int64)

@@ -3,7 +3,7 @@
 On top of a heat segmentation (the paper's seeds and fields stay the initialisation):
 
 1. **Fit** every segment (:func:`~igl_heatseg.surfaces.fit.fit_surface`: the simplest kind
-   within the mesh's own tolerance, :func:`~igl_heatseg.surfaces.fit.fit_tolerance`).
+   within the mesh's own tolerance, :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance`).
 2. **Split** every segment that no surface explains by fit-driven region growing inside it
    (:func:`grow_regions`): seeds from smooth interiors, a surface fitted to the seed's rings,
    growth over faces whose corners lie on it, refits as the region grows (a small patch of a
@@ -32,8 +32,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, face_normals
-from .fit import fit_surface, fit_tolerance
 from .model import SURFACE_KINDS, Surface
+from .select import fit_surface
+from .tolerance import vertex_tolerance
 
 __all__ = [
     "SurfaceSegmentation",
@@ -84,6 +85,11 @@ MERGE_SMALL_FACES = 64
 PRECHECK_TOL = 10.0
 PRECHECK_SAMPLES = 200
 
+#: ... or when the face normals turn across their shared boundary by less than this on
+#: average (radians): the facets of a coarse curved surface (a 9-facet circle turns 40 degrees
+#: per facet) may join into one surface of a more general kind (strips -> cylinder).
+UPGRADE_ANGLE = math.radians(40.0)
+
 #: Parameters of each kind, and how many samples beyond them a fit needs to count as evidence
 #: (a plane through 4 points has one redundant point; the curved kinds need two).
 _PARAMS = {"plane": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
@@ -96,6 +102,17 @@ NORMAL_OFF_SHARE = 0.05
 #: A segment's fit may leave out faces off its surface up to this share of its area (a
 #: boundary one triangle off); beyond it the segment is not explained.
 TRIM_SHARE = 0.05
+
+#: Rings of boundary faces left out of a segment's core fit, and the least share of the
+#: segment the core must keep.
+CORE_RINGS = 2
+CORE_MIN_SHARE = 0.3
+
+#: A region-growing split is kept when at least SPLIT_GOOD_SHARE of the area is in pieces
+#: whose fit RMS is within SPLIT_RMS_RATIO x tol (measured: true faces 1e-6 tol on clean CAD
+#: meshes and 0.3-0.5 tol at noise 0.1 edge; the fandisk's freeform blends 0.8-1.0 tol).
+SPLIT_RMS_RATIO = 0.65
+SPLIT_GOOD_SHARE = 0.6
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
@@ -407,12 +424,24 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
 
     faces_of = {k: np.flatnonzero(labels == k) for k in fits}
     fa, fb = segment_adjacency(F, labels)
-    pairs = {tuple(sorted(p)) for p in zip(labels[fa].tolist(), labels[fb].tolist(), strict=True)}
+    la, lb = np.minimum(labels[fa], labels[fb]), np.maximum(labels[fa], labels[fb])
+    FNs = face_normals(V if W is None else W, F) if FN is None else FN
+    turn = np.arccos(np.clip(np.einsum("ij,ij->i", FNs[fa], FNs[fb]), -1.0, 1.0))
+    bend: dict = {}  # mean turn of the face normals across each pair's shared edges
+    for a, b, x in zip(la.tolist(), lb.tolist(), turn.tolist(), strict=True):
+        sx, n = bend.get((a, b), (0.0, 0))
+        bend[(a, b)] = (sx + x, n + 1)
+    bend = {k: sx / n for k, (sx, n) in bend.items()}
+    pairs = set(bend)
     nbrs: dict[int, set] = {k: set() for k in fits}
     for a, b in pairs:
         nbrs[a].add(b)
         nbrs[b].add(a)
     heap = []
+
+    def smooth(a, b) -> bool:
+        """The boundary bends less than a crease: facets of one curved surface, maybe."""
+        return bend.get((min(a, b), max(a, b)), math.pi) <= UPGRADE_ANGLE
 
     def push(a, b):
         # a union is fitted only when one part's surface already comes near the other part
@@ -428,7 +457,7 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
             u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
         elif db <= tol and _explains(fits[b], tol):
             u = fits[b]
-        elif min(da, db) <= PRECHECK_TOL * tol or (
+        elif min(da, db) <= PRECHECK_TOL * tol or smooth(a, b) or (
             max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
             and not _explains(fits[a], tol)
             and not _explains(fits[b], tol)
@@ -456,6 +485,9 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
         dirty.add(a)
         dirty.discard(b)
         del fits[b]
+        for c in nbrs[b] - {a}:  # the merged boundary bends as little as its smoothest part
+            key_b, key_a = (min(b, c), max(b, c)), (min(a, c), max(a, c))
+            bend[key_a] = min(bend.get(key_a, math.pi), bend.get(key_b, math.pi))
         nbrs[a] = (nbrs[a] | nbrs.pop(b)) - {a, b}
         for c in nbrs[a]:
             nbrs[c] = (nbrs[c] - {b}) | {a}
@@ -504,6 +536,57 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) 
         for k in changed.tolist():
             fits[k] = _fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
     return moved
+
+
+def _core(F, labels, faces, TT) -> np.ndarray:
+    """The faces of a segment more than CORE_RINGS rings away from its boundary with other
+    segments (all of them when that leaves under CORE_MIN_SHARE of the segment)."""
+    core = np.zeros(len(F), dtype=bool)
+    core[faces] = True
+    for _ in range(CORE_RINGS):
+        nb = TT[core]
+        touches = ((nb >= 0) & ~core[np.maximum(nb, 0)]).any(axis=1)
+        core[np.flatnonzero(core)[touches]] = False
+    kept = np.flatnonzero(core)
+    return kept if len(kept) >= CORE_MIN_SHARE * len(faces) else faces
+
+
+def _real_split(V, F, parts, part_fits, tol) -> bool:
+    """A split found real faces when most of the area lies in pieces fitted well inside the
+    tolerance (true faces fit to the noise level, 0.4 tol, or to round-off on a CAD mesh); a
+    smooth freeform surface shatters into pieces each just within it, and stays whole."""
+    A = np.array([face_areas(V, F[p]).sum() for p in parts])
+    r = np.array([f.rms / tol if f.is_analytic else np.inf for f in part_fits])
+    good = A[r <= SPLIT_RMS_RATIO].sum()
+    return bool(good >= SPLIT_GOOD_SHARE * A.sum())
+
+
+def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT) -> int:
+    """A face with two or three neighbours of another segment, on whose surface it lies
+    (within GROW_TOL x tol), joins it: the single-face teeth a noisy boundary leaves."""
+    changed = 0
+    for _ in range(MOVE_PASSES):
+        nb = TT
+        nl = np.where(nb >= 0, labels[np.maximum(nb, 0)], -1)
+        other = nl != labels[:, None]
+        cand = np.flatnonzero((other & (nl >= 0)).sum(axis=1) >= 2)
+        if len(cand) == 0:
+            break
+        moved = 0
+        new = labels.copy()
+        for f in cand.tolist():
+            ls, counts = np.unique(nl[f][other[f] & (nl[f] >= 0)], return_counts=True)
+            if counts.max() < 2:
+                continue
+            k = int(ls[np.argmax(counts)])
+            if _corner_rms(V, F, np.array([f]), fits[k])[0] <= GROW_TOL * tol:
+                new[f] = k
+                moved += 1
+        if moved == 0:
+            break
+        labels[:] = new
+        changed += moved
+    return changed
 
 
 def _absorb_shards(V, F, labels, fits: dict, tol: float, TT) -> np.ndarray:
@@ -557,7 +640,9 @@ def refine_segmentation(
     labels : (m,) int64
         Initial segmentation (e.g. the heat segmentation).
     tol : float, optional
-        Fit tolerance (model units); default :func:`~igl_heatseg.surfaces.fit.fit_tolerance`.
+        Fit tolerance (model units); default
+        :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance` (distances are measured at
+        vertices, which lie on the true surface whatever the facet size).
     split : bool
         Split segments that no surface explains (step 2).
     normals_from : (n, 3) float64, optional
@@ -587,7 +672,7 @@ def refine_segmentation(
     TT = _adjacency(F)
     FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
-    tol = fit_tolerance(V, F) if tol is None else float(tol)
+    tol = vertex_tolerance(V, F) if tol is None else float(tol)
     timings["tolerance"] = time.perf_counter() - t0
 
     t = time.perf_counter()
@@ -599,16 +684,24 @@ def refine_segmentation(
         progress("fit", i / max(len(ks), 1))
         faces = np.flatnonzero(labels == k)
         s = _fit(V, F, faces, tol, W=W, FN=FN)
+        if not _explains(s, tol):
+            # a noisy boundary carries a few of the neighbours' faces: fit the core
+            core = _core(F, labels, faces, TT)
+            if len(core) < len(faces):
+                s_core = _fit(V, F, core, tol, W=W, FN=FN)
+                if _explains(s_core, tol):
+                    s = s_core
         if split and not _explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
             sub = grow_regions(V, F, faces, tol, FN, TT, W)
-            if sub.max() > 0:
+            parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
+            part_fits = [_fit(V, F, part, tol, W=W, FN=FN) for part in parts]
+            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol):
                 n_split += 1
-                for r in range(int(sub.max()) + 1):
-                    part = faces[sub == r]
+                for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):
                     lab = k if r == 0 else nxt
                     nxt += r > 0
                     labels[part] = lab
-                    fits[lab] = _fit(V, F, part, tol, W=W, FN=FN)
+                    fits[lab] = fr
                 continue
         fits[k] = s
     timings["fit_split"] = time.perf_counter() - t
@@ -624,6 +717,7 @@ def refine_segmentation(
         t = time.perf_counter()
         progress("boundaries", 0.0)
         mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN)
+        mv_round += _smooth_teeth(V, F, labels, fits, tol, TT)
         pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
         if len(np.unique(pieces)) != len(fits):
             labels = pieces

@@ -5,7 +5,9 @@ float64``, ``F (m,3) int64``, outward when closed), face ``labels (m,) int64`` i
 (each segment face-connected), ``k`` :class:`igl_heatseg.surfaces.model.Surface` objects and
 optional per-segment UV charts; returns a :class:`CadResult` (OCC shape, per-face status,
 fidelity, timings). Faces that cannot be built are faceted and reported, never raised.
-Imports only :mod:`igl_heatseg.errors` and :mod:`igl_heatseg.surfaces.model` from the package.
+Imports only :mod:`igl_heatseg.errors` and :mod:`igl_heatseg.surfaces` from the package
+(:mod:`.segments` fits surfaces to segments that have none, and turns pipeline charts, taken
+by duck typing, into the ``uv`` argument).
 
 OpenCASCADE (``OCP``) is an optional dependency, imported when a name of this subpackage is
 first used; without it an ImportError says ``pip install 'igl_heatseg[cad]'``.
@@ -15,7 +17,8 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["build_brep", "CadResult", "write_step", "read_step", "brep_fidelity"]
+__all__ = ["build_brep", "CadResult", "write_step", "read_step", "brep_fidelity",
+           "tessellate_by_type", "fit_segment_surfaces", "chart_uvs"]
 
 _WHERE = {
     "build_brep": "build",
@@ -23,6 +26,9 @@ _WHERE = {
     "write_step": "step",
     "read_step": "step",
     "brep_fidelity": "fidelity",
+    "tessellate_by_type": "fidelity",
+    "fit_segment_surfaces": "segments",
+    "chart_uvs": "segments",
 }
 
 

@@ -30,7 +30,8 @@ from OCP.TopoDS import TopoDS  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "tessellate", "mesh_volume"]
+__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "tessellate", "tessellate_by_type",
+           "face_type", "mesh_volume"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -134,10 +135,65 @@ def tessellate(shape, deflection: float):
     return np.vstack(Vs), np.vstack(Fs).astype(np.int64), missing
 
 
+def face_type(face) -> str:
+    """Surface type of a B-Rep face: ``plane``, ``cylinder``, ``cone``, ``sphere``, ``torus``,
+    ``bspline``, ``bezier`` or ``other``."""
+    return _TYPE_NAMES.get(BRepAdaptor_Surface(face).GetType(), "other")
+
+
+def tessellate_by_type(shape, deflection: float):
+    """Triangles of a B-Rep with the face and surface type of every triangle (for pictures).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+    deflection : float
+        Linear deflection of the tessellation (model units).
+
+    Returns
+    -------
+    TV : (p, 3) float64
+    TF : (q, 3) int64
+        Triangles oriented like their faces; the faces do not share vertices.
+    tri_face : (q,) int64
+        Index of each triangle's face in :func:`faces_of` order.
+    face_types : list of str
+        :func:`face_type` of every face (faces OCC could not tessellate included).
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    >>> TV, TF, tri_face, types = tessellate_by_type(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape(),
+    ...                                              0.01)
+    >>> sorted(types), sorted(set(tri_face.tolist()))
+    (['cylinder', 'plane', 'plane'], [0, 1, 2])
+    """
+    BRepMesh_IncrementalMesh(shape, deflection, False, MESH_ANGLE, False)
+    Vs, Fs, ids, types, off = [], [], [], [], 0
+    for i, face in enumerate(faces_of(shape)):
+        types.append(face_type(face))
+        tri, loc = _triangulation(face, deflection)
+        if tri is None:
+            continue
+        trsf = loc.Transformation()
+        P = np.array([[q.X(), q.Y(), q.Z()] for q in
+                      (tri.Node(j).Transformed(trsf) for j in range(1, tri.NbNodes() + 1))])
+        T = np.array([tri.Triangle(j).Get() for j in range(1, tri.NbTriangles() + 1)]) - 1
+        if face.Orientation() == TopAbs_REVERSED:
+            T = T[:, ::-1]
+        Vs.append(P)
+        Fs.append(T + off)
+        ids.append(np.full(len(T), i, dtype=np.int64))
+        off += len(P)
+    if not Vs:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int64), types
+    return (np.vstack(Vs), np.vstack(Fs).astype(np.int64), np.concatenate(ids), types)
+
+
 def _face_table(shape) -> tuple[dict, list]:
     by_type, areas = {}, []
     for face in faces_of(shape):
-        name = _TYPE_NAMES.get(BRepAdaptor_Surface(face).GetType(), "other")
+        name = face_type(face)
         props = GProp_GProps()
         BRepGProp.SurfaceProperties_s(face, props)
         by_type.setdefault(name, {"count": 0, "area": 0.0})

@@ -12,9 +12,11 @@ Modules:
 ``layout``  chart geometry: which charts to draw, area-normalised UVs, the 2D layout
 ``render``  screenshots, :func:`render_scene` (one stage to a PNG), :func:`write_run_pictures`
 ``plots``   matplotlib figures: area distribution, chart maps, sweeps
+``brep``    the B-Rep picture: mesh by segment next to B-Rep faces by type (arrays from ``cad``)
 """
 
-from . import camera, layout, plots, render, scene
+from . import brep, camera, layout, plots, render, scene
+from .brep import render_brep
 from .camera import (
     CAMERA_MARGIN,
     DEFAULT_SIZE,
@@ -56,6 +58,8 @@ __all__ = [
     "plots",
     "render",
     "scene",
+    "brep",
+    "render_brep",
     "STAGES",
     "CHART_STAGES",
     "BACKEND_ENV",

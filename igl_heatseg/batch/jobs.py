@@ -4,8 +4,8 @@ The command line (:mod:`igl_heatseg.cli.segment`, :mod:`igl_heatseg.cli.run`) an
 worker call the same functions here, so a batch writes into ``OUT/<mesh>/`` exactly what the
 single-mesh command writes. Nothing here imports Dask.
 
-:data:`JOB_KINDS` is the table of job kinds ``igl-heatseg batch --command`` accepts. A new kind
-(e.g. ``cad``: segment, fit surfaces, write a STEP file) is one :class:`JobKind` entry: a
+:data:`JOB_KINDS` is the table of job kinds ``igl-heatseg batch --command`` accepts (``segment``,
+``run``, ``cad``: segment, fit surfaces, write a STEP file). A new kind is one :class:`JobKind` entry: a
 ``run(mesh_path, out_dir, **options) -> report`` function writing through
 :func:`~igl_heatseg.io.atomic_dir`, and a ``summarize(report) -> dict`` picking the summary
 columns from its report.
@@ -30,6 +30,8 @@ from ..segmentation import segment_with_mode
 __all__ = [
     "segment_file",
     "run_file",
+    "cad_file",
+    "write_cad",
     "JobOutput",
     "write_pictures",
     "input_report",
@@ -189,6 +191,8 @@ def run_file(
     cut_paths=(),
     pictures: bool = True,
     repair: bool = False,
+    step: bool = False,
+    tol: float | None = None,
     progress=None,
 ) -> JobOutput:
     """Load, run the pipeline and write one mesh: what ``igl-heatseg run MESH -o OUT`` does.
@@ -202,6 +206,9 @@ def run_file(
         As for :func:`~igl_heatseg.pipeline.run_pipeline`.
     pictures : bool
         Render the pictures (skipped with a warning without the ``viz`` extra).
+    step, tol
+        Also build the B-Rep and write ``model.step`` (:func:`write_cad`, freeform faces over
+        the certified chart maps; ``report["cad"]``), at modelling tolerance ``tol``.
     progress : callable(stage, fraction), optional
 
     Returns
@@ -210,6 +217,8 @@ def run_file(
         ``report["parameterization"]`` sums up the charts; ``result`` is the
         :class:`~igl_heatseg.pipeline.PipelineResult`.
     """
+    if step:
+        _check_cad(tol)
     t0 = time.perf_counter()
     mesh = load_mesh(mesh_path, repair=repair)
     t_load = time.perf_counter() - t0
@@ -232,9 +241,134 @@ def run_file(
     extra.update(input_report(mesh, res.segmentation.labels))
     with atomic_dir(out) as tmp:
         pics = write_pictures(tmp, res) if pictures else None
+        if step:
+            extra["cad"] = write_cad(tmp, mesh, res.segmentation, res.charts, tol=tol,
+                                     pictures=pictures, progress=progress)
         report = write_run(tmp, res, extra, t_start=t0, pictures=pics)
         write_input_labels(tmp, mesh, res.segmentation.labels)
     return JobOutput(report, mesh, res)
+
+
+#: Tessellation deflection of ``brep.png``, as a fraction of the bounding-box diagonal.
+PICTURE_DEFLECTION_REL = 1e-3
+
+
+def _check_cad(tol) -> None:
+    """OCP importable (else ImportError with the install hint) and ``tol`` positive."""
+    from ..cad import build_brep  # noqa: F401  (the import checks OCP)
+
+    if tol is not None and not (np.isfinite(tol) and tol > 0):
+        raise MeshError(f"tol must be a positive number (model units), got {tol!r}")
+
+
+def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=None) -> dict:
+    """Build the B-Rep of a segmentation, write ``out/model.step`` (AP214, mm) and, with
+    ``pictures``, ``out/brep.png``; returns the ``cad`` section of ``report.json``.
+
+    Segments keep their labels: robust mode's fitted surfaces are used as they are; a
+    segmentation without surfaces (paper mode) gets one fitted per segment
+    (:func:`~igl_heatseg.cad.fit_segment_surfaces`). With ``charts`` (the pipeline's),
+    freeform segments are fitted over their certified chart maps
+    (:func:`~igl_heatseg.cad.chart_uvs`).
+
+    Returns
+    -------
+    dict
+        :meth:`~igl_heatseg.cad.CadResult.to_report` plus ``step``, ``unit``, ``segments``,
+        ``surfaces_from``, ``charts_used``, ``picture`` and timings of the fits, the STEP
+        file and the picture.
+    """
+    from ..cad import build_brep, chart_uvs, fit_segment_surfaces, tessellate_by_type, write_step
+
+    out = Path(out)
+    t = time.perf_counter()
+    surfaces = getattr(seg, "surfaces", None)
+    fitted_here = surfaces is None
+    if fitted_here:
+        surfaces = fit_segment_surfaces(mesh.V, mesh.F, seg.labels)
+    t_fit = time.perf_counter() - t
+    uv = chart_uvs(seg.labels, surfaces, charts) if charts is not None else None
+    res = build_brep(mesh.V, mesh.F, seg.labels, surfaces, uv=uv, tol=tol, progress=progress)
+    t = time.perf_counter()
+    write_step(res.shape, out / "model.step", unit="mm")
+    cad = res.to_report()
+    cad["timings"].update(fit=t_fit, step=time.perf_counter() - t)
+    cad.update(step="model.step", unit="mm", segments=len(surfaces),
+               surfaces_from="fitted to the segments" if fitted_here else "segmentation",
+               charts_used=sum(x is not None for x in (uv or [])), picture=None)
+    if fitted_here:
+        cad["surfaces"] = [dict(segment=i, **s.to_dict()) for i, s in enumerate(surfaces)]
+    if pictures:
+        t = time.perf_counter()
+        try:
+            from ..viz import render_brep
+
+            TV, TF, tri_face, types = tessellate_by_type(
+                res.shape, PICTURE_DEFLECTION_REL * res.tolerances["diag"])
+            render_brep(out / "brep.png", mesh.V, mesh.F, seg.labels, TV, TF, tri_face, types)
+            cad["picture"] = "brep.png"
+        except (ImportError, RuntimeError) as exc:  # no polyscope or no EGL: no picture
+            log.warning("no brep.png: %s", exc)
+        cad["timings"]["picture"] = time.perf_counter() - t
+    return cad
+
+
+def cad_file(
+    mesh_path: str | os.PathLike,
+    out: str | os.PathLike,
+    *,
+    mode: str = "robust",
+    theta: float | None = None,
+    eps: float | None = None,
+    solver: str = "fast",
+    tol: float | None = None,
+    repair: bool = False,
+    pictures: bool = True,
+    progress=None,
+) -> JobOutput:
+    """Load, segment, build the B-Rep and write one mesh: what ``igl-heatseg cad MESH -o OUT``
+    does.
+
+    Parameters
+    ----------
+    mesh_path, out, mode, theta, eps, solver, repair
+        As for :func:`segment_file` (``mode`` defaults to ``"robust"``, which fits the
+        surfaces); ``out`` also gets ``model.step`` and, with ``pictures``, ``brep.png``.
+    tol : float, optional
+        Modelling tolerance (model units) of :func:`~igl_heatseg.cad.build_brep`.
+    pictures : bool
+    progress : callable(stage, fraction), optional
+
+    Returns
+    -------
+    JobOutput
+        ``report["cad"]`` is :func:`write_cad`'s section.
+
+    Raises
+    ------
+    ImportError
+        OCP missing (the message says ``pip install 'igl_heatseg[cad]'``); nothing is done.
+    MeshError
+        Bad mesh or ``tol``; nothing is written.
+    """
+    _check_cad(tol)
+    t0 = time.perf_counter()
+    mesh = load_mesh(mesh_path, repair=repair)
+    t_load = time.perf_counter() - t0
+    if progress is not None:
+        progress = _sized(progress, mesh.F.shape[0])
+    seg = named(mesh, segment_with_mode, mesh, mode, theta, eps, progress=progress, solver=solver)
+    extra = {"input": str(Path(mesh_path).resolve()), "timings": {"load": t_load}}
+    extra.update(input_report(mesh, seg.labels))
+    with atomic_dir(out) as tmp:
+        t = time.perf_counter()
+        extra["cad"] = write_cad(tmp, mesh, seg, tol=tol, pictures=pictures, progress=progress)
+        extra["timings"]["cad"] = time.perf_counter() - t
+        report = write_segmentation(tmp, mesh, seg, extra, t_start=t0)
+        write_input_labels(tmp, mesh, seg.labels)
+    if progress is not None:
+        progress("done", 1.0)
+    return JobOutput(report, mesh, seg)
 
 
 def _small_mesh():
@@ -256,6 +390,10 @@ def _warm_run() -> None:
 
 
 def _summarize_segment(report: dict) -> dict:
+    return {"faces": report.get("faces"), "segments": report.get("segments")}
+
+
+def _summarize_cad(report: dict) -> dict:
     return {"faces": report.get("faces"), "segments": report.get("segments")}
 
 
@@ -302,7 +440,7 @@ class JobKind:
     warm_up: Callable[[], None] | None = None
 
 
-#: ``--command`` -> job kind. ``cad`` goes here when the cad stage has its single-mesh command.
+#: ``--command`` -> job kind.
 JOB_KINDS: dict[str, JobKind] = {
     "segment": JobKind(
         "segment",
@@ -318,6 +456,14 @@ JOB_KINDS: dict[str, JobKind] = {
         ("mode", "theta", "eps", "solver", "energy", "cut", "pictures", "repair"),
         ("segmentation.png", "checker.png"),
         warm_up=_warm_run,
+    ),
+    "cad": JobKind(
+        "cad",
+        cad_file,
+        _summarize_cad,
+        ("mode", "theta", "eps", "solver", "tol", "pictures", "repair"),
+        ("brep.png",),
+        warm_up=_warm_segment,
     ),
 }
 

@@ -14,7 +14,7 @@ import sys
 
 from ..errors import MeshError
 from ..version import __version__
-from . import batch, compare, evaluate, run, segment, viz
+from . import batch, cad, compare, evaluate, run, segment, viz
 from .common import PROGRESS_MIN_FACES, Progress
 
 __all__ = ["main", "build_parser", "Progress", "PROGRESS_MIN_FACES"]
@@ -22,7 +22,7 @@ __all__ = ["main", "build_parser", "Progress", "PROGRESS_MIN_FACES"]
 log = logging.getLogger("igl_heatseg")
 
 #: Subcommand modules, in the order ``--help`` lists them.
-_COMMANDS = (segment, run, batch, viz, evaluate, compare)
+_COMMANDS = (segment, run, cad, batch, viz, evaluate, compare)
 
 
 def build_parser() -> argparse.ArgumentParser:

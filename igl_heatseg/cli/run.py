@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..batch.jobs import run_file, write_pictures
+from .cad import cad_summary
 from .common import (
     add_progress_argument,
     add_repair_argument,
@@ -43,7 +44,31 @@ def parse_cut_path(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     """Load, run the pipeline, write the files and pictures; one summary line on stderr."""
-    job = run_file(
+    try:
+        job = _run_file(args)
+    except ImportError as exc:  # --step without OCP (the `cad` extra)
+        print(f"igl-heatseg: error: {exc}", file=sys.stderr)
+        return 2
+    report, mesh, res = job.report, job.mesh, job.result
+    s = report["parameterization"]
+    sys.stderr.write(
+        f"{Path(args.mesh).name}{repair_summary(mesh)}: {res.segmentation.num_segments} segments, "
+        f"{s['charts_total']} charts ({s['charts_cut']} cut), {s['charts_bijective']} bijective, "
+        f"{s['charts_fallback']} via fallback, in {report['timings']['total']:.2f} s; "
+        f"wrote {args.out}/\n"
+    )
+    if "cad" in report:
+        sys.stderr.write(f"{cad_summary(report['cad'])}; wrote {args.out}/model.step\n")
+    if s["charts_bijective"] < s["charts_total"]:
+        sys.stderr.write(
+            f"igl-heatseg: warning: {s['charts_total'] - s['charts_bijective']} chart(s) without "
+            "a bijective map (see report.json `charts`)\n"
+        )
+    return 0
+
+
+def _run_file(args: argparse.Namespace):
+    return run_file(
         args.mesh,
         args.out,
         mode=args.mode,
@@ -55,22 +80,10 @@ def run(args: argparse.Namespace) -> int:
         cut_paths=args.cut_path or [],
         pictures=args.pictures,
         repair=bool(getattr(args, "repair", False)),
+        step=bool(getattr(args, "step", False)),
+        tol=getattr(args, "tol", None),
         progress=progress_for(args),
     )
-    report, mesh, res = job.report, job.mesh, job.result
-    s = report["parameterization"]
-    sys.stderr.write(
-        f"{Path(args.mesh).name}{repair_summary(mesh)}: {res.segmentation.num_segments} segments, "
-        f"{s['charts_total']} charts ({s['charts_cut']} cut), {s['charts_bijective']} bijective, "
-        f"{s['charts_fallback']} via fallback, in {report['timings']['total']:.2f} s; "
-        f"wrote {args.out}/\n"
-    )
-    if s["charts_bijective"] < s["charts_total"]:
-        sys.stderr.write(
-            f"igl-heatseg: warning: {s['charts_total'] - s['charts_bijective']} chart(s) without "
-            "a bijective map (see report.json `charts`)\n"
-        )
-    return 0
 
 
 def register(subparsers) -> None:
@@ -123,6 +136,20 @@ def register(subparsers) -> None:
         action="store_false",
         help="do not render segmentation.png and checker.png (rendered by default when the "
         "`viz` extra and an OpenGL/EGL library are available; skipped with a warning otherwise)",
+    )
+    p.add_argument(
+        "--step",
+        action="store_true",
+        help="also build the B-Rep (freeform faces over the certified chart maps) and write "
+        "model.step, brep.png and a `cad` section in report.json, as `igl-heatseg cad` does "
+        "(needs the `cad` extra)",
+    )
+    p.add_argument(
+        "--tol",
+        type=float,
+        default=None,
+        metavar="T",
+        help="--step: modelling tolerance in model units (default 1 %% of the bbox diagonal)",
     )
     add_progress_argument(p)
     p.set_defaults(func=run)

@@ -124,6 +124,20 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
+def core_probe() -> float:
+    """Wall time of two CPU-bound processes (2 CPU s each) over that of one: 1.0 when this
+    session can use 2 cores now, 2.0 when it gets one (other sessions busy)."""
+    code = "import time\nt = time.process_time()\nwhile time.process_time() - t < 2: pass"
+    walls = []
+    for n in (1, 2):
+        t = time.perf_counter()
+        procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(n)]
+        for p in procs:
+            p.wait()
+        walls.append(time.perf_counter() - t)
+    return walls[1] / walls[0]
+
+
 def run_loop(meshes: list[Path], src: Path, out: Path) -> tuple[float, int]:
     """The plain loop: one ``igl-heatseg segment`` subprocess per mesh."""
     shutil.rmtree(out, ignore_errors=True)
@@ -196,6 +210,8 @@ def main() -> int:
     load0 = os.getloadavg()
     res: dict = {"meshes": len(meshes), "faces": faces.tolist(), "load_before": load0}
 
+    res["core_probe"] = [core_probe()]
+    print(f"core probe: {res['core_probe'][0]:.2f}", flush=True)
     if not args.skip_loop:
         c0 = _cpu()
         t_loop, ok = run_loop(meshes, src, work / "out_loop")
@@ -221,6 +237,8 @@ def main() -> int:
             f"{ {k: round(v) for k, v in per_worker.items()} }",
             flush=True,
         )
+    res["core_probe"].append(core_probe())
+    print(f"core probe: {res['core_probe'][-1]:.2f}", flush=True)
     keys = [m.relative_to(src).with_suffix("") for m in meshes]
     if not args.skip_loop:
         res["labels_differ"] = {
@@ -295,6 +313,10 @@ def write_markdown(path: Path, res: dict, summary: dict) -> None:
         "whole process tree.",
         "",
         _autogroup_note(),
+        "",
+        "Core probe (wall time of two CPU-bound processes in one session over that of one: "
+        "1.0 = two cores free for this session, 2.0 = one): before the runs "
+        f"{res['core_probe'][0]:.2f}, after the batches {res['core_probe'][-1]:.2f}.",
         "",
         "| run | wall s | CPU s | speed-up vs loop (wall) | outcome |",
         "| --- | ---: | ---: | ---: | --- |",

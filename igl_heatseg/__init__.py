@@ -68,7 +68,7 @@ __all__ = [
 
 #: Subpackages imported on first attribute access (PEP 562), so that ``import igl_heatseg``
 #: never pulls in polyscope or matplotlib.
-_LAZY = ("viz", "evaluation", "cli")
+_LAZY = ("viz", "evaluation", "cad", "batch", "cli")
 
 
 def __getattr__(name: str):

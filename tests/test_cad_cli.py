@@ -1,0 +1,128 @@
+"""``igl-heatseg cad`` and ``run --step``: STEP files that read back as the part, a cad section
+in report.json, one-line errors with exit code 2 (also without OCP), the batch job kind."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import igl
+import numpy as np
+import pytest
+
+pytest.importorskip("OCP")
+
+from meshes import cube, cylinder  # noqa: E402
+
+from igl_heatseg.batch.jobs import JOB_KINDS, cad_file  # noqa: E402
+from igl_heatseg.cad import read_step  # noqa: E402
+from igl_heatseg.cad.fidelity import brep_fidelity, faces_of  # noqa: E402
+from igl_heatseg.cli import main  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def cube_obj(tmp_path_factory):
+    V, F = cube(6)
+    path = tmp_path_factory.mktemp("parts") / "cube.obj"
+    igl.write_triangle_mesh(str(path), V, F)
+    return path, V, F
+
+
+@pytest.fixture(scope="module")
+def cylinder_obj(tmp_path_factory):
+    V, F = cylinder(48, 6, radius=1.0, height=2.0)
+    path = tmp_path_factory.mktemp("parts") / "cylinder.obj"
+    igl.write_triangle_mesh(str(path), V, F)
+    return path, V, F
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith("igl-heatseg: error: ")
+    return err[0]
+
+
+def test_cad_cube_gives_a_valid_solid_of_six_planes(cube_obj, tmp_path, capsys):
+    path, V, F = cube_obj
+    out = tmp_path / "out"
+    assert main(["cad", str(path), "-o", str(out), "--no-pictures"]) == 0
+    assert "valid solid, 6 faces" in capsys.readouterr().err
+    shape = read_step(out / "model.step")
+    fid = brep_fidelity(shape, V, F)
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert len(faces_of(shape)) == 6 and fid["faces_by_type"]["plane"]["count"] == 6
+    assert fid["volume_rel_error"] < 1e-6
+    rep = json.loads((out / "report.json").read_text())
+    cad = rep["cad"]
+    assert cad["step"] == "model.step" and cad["unit"] == "mm" and cad["segments"] == 6
+    assert cad["not_built"] == [] and cad["fidelity"]["solids"] == 1
+    for key in ("valid", "free_edges", "faces_by_type", "hausdorff", "rms", "volume_rel_error"):
+        assert key in cad["fidelity"]
+    assert {"surfaces", "edges", "faces", "sew", "fidelity", "step"} <= set(cad["timings"])
+    # everything `segment` writes is there too
+    assert {"labels.txt", "vertex_labels.txt", "segmented.ply"} <= {p.name for p in out.iterdir()}
+    assert not list(tmp_path.glob(".out.*"))  # atomic: no temporary folder left
+
+
+def test_cad_paper_mode_fits_the_papers_segments(cylinder_obj, tmp_path):
+    path, V, F = cylinder_obj
+    job = cad_file(path, tmp_path / "out", mode="paper", pictures=False)
+    cad = job.report["cad"]
+    assert cad["surfaces_from"] == "fitted to the segments"
+    assert len(cad["surfaces"]) == job.report["segments"] == len(cad["faces"])
+    shape = read_step(tmp_path / "out" / "model.step")
+    fid = brep_fidelity(shape, V, F)
+    assert fid["valid"] and fid["solids"] == 1
+    assert fid["faces_by_type"]["cylinder"]["count"] == 1
+    assert fid["faces_by_type"]["plane"]["count"] == 2 and fid["faces"] == 3
+
+
+def test_run_step_writes_the_step_file_and_cad_section(cube_obj, tmp_path):
+    path, V, F = cube_obj
+    out = tmp_path / "run"
+    assert main(["run", str(path), "-o", str(out), "--step", "--mode", "robust",
+                 "--no-pictures"]) == 0
+    rep = json.loads((out / "report.json").read_text())
+    assert "parameterization" in rep and rep["cad"]["fidelity"]["solids"] == 1
+    assert len(faces_of(read_step(out / "model.step"))) == 6
+    assert (out / "atlas.obj").exists()
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path, cube_obj, capsys):
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nf 1 2 3\n")
+    assert main(["cad", str(bad), "-o", str(tmp_path / "o1")]) == 2
+    _one_line_error(capsys)
+    assert main(["cad", str(tmp_path / "missing.obj"), "-o", str(tmp_path / "o2")]) == 2
+    _one_line_error(capsys)
+    assert main(["cad", str(cube_obj[0]), "-o", str(tmp_path / "o3"), "--tol", "-1"]) == 2
+    assert "tol" in _one_line_error(capsys)
+    assert not (tmp_path / "o1").exists() and not (tmp_path / "o3").exists()
+
+
+def test_without_ocp_one_line_with_the_install_hint(monkeypatch, cube_obj, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "OCP", None)  # `import OCP` raises ImportError
+    for argv in (["cad", str(cube_obj[0]), "-o", str(tmp_path / "a")],
+                 ["run", str(cube_obj[0]), "-o", str(tmp_path / "b"), "--step"]):
+        assert main(argv) == 2
+        assert "pip install 'igl_heatseg[cad]'" in _one_line_error(capsys)
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_batch_has_the_cad_job_kind():
+    kind = JOB_KINDS["cad"]
+    assert kind.run is cad_file and "tol" in kind.options and kind.pictures == ("brep.png",)
+    assert kind.summarize({"faces": 12, "segments": 6}) == {"faces": 12, "segments": 6}
+
+
+def test_brep_picture_helpers():
+    from igl_heatseg.cad import tessellate_by_type
+    from igl_heatseg.viz.brep import brep_type_colors, face_border_edges
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+
+    TV, TF, tri_face, types = tessellate_by_type(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape(), 0.01)
+    assert sorted(types) == ["cylinder", "plane", "plane"] and len(tri_face) == len(TF)
+    assert np.allclose(brep_type_colors(["bspline"]), brep_type_colors(["freeform"]))
+    E = face_border_edges(TF, tri_face)
+    assert len(E) > 0 and E.max() < len(TV)

@@ -31,6 +31,7 @@ __all__ = [
     "PackedAtlas",
     "pack_charts",
     "min_area_rotation",
+    "rotate_points",
     "convex_hull",
     "boxes_overlap",
     "atlas_corner_uv",
@@ -198,7 +199,24 @@ def min_area_rotation(UV: ArrayLike) -> float:
     return float(np.arctan2(np.sin(best), np.cos(best)))
 
 
-def _rotate(P: np.ndarray, t: float) -> np.ndarray:
+def rotate_points(P: np.ndarray, t: float) -> np.ndarray:
+    """Points rotated by ``t`` radians counter-clockwise about the origin.
+
+    Parameters
+    ----------
+    P : (p, 2) float64
+    t : float
+
+    Returns
+    -------
+    (p, 2) float64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rotate_points(np.array([[1.0, 0.0]]), np.pi / 2).round(12).tolist()
+    [[0.0, 1.0]]
+    """
     c, s = np.cos(t), np.sin(t)
     return P @ np.array([[c, s], [-s, c]])
 
@@ -383,7 +401,7 @@ def pack_charts(
         P = P_list[i] * chart_scales[i]
         if rotate:
             rotations[i] = min_area_rotation(P)
-            P = _rotate(P, rotations[i])
+            P = rotate_points(P, rotations[i])
         local.append(P - P.min(axis=0))
     ext = np.array([P.max(axis=0) for P in local])  # (k, 2) box sizes
     ext = np.maximum(ext, 1e-300)
@@ -418,7 +436,7 @@ def pack_charts(
     turns = turned.astype(np.int64)
     if packer == "outlines" or (packer == "auto" and k <= OUTLINE_MAX_CHARTS):
         offsets, q_turns = pack_outlines(local, F_list, gutter)
-        placed = [_rotate(local[i], q_turns[i] * np.pi / 2) for i in range(k)]
+        placed = [rotate_points(local[i], q_turns[i] * np.pi / 2) for i in range(k)]
         placed = [P - P.min(axis=0) + offsets[i] for i, P in enumerate(placed)]
         lo = np.min([P.min(axis=0) for P in placed], axis=0)
         side_o = float((np.max([P.max(axis=0) for P in placed], axis=0) - lo).max()) + g
@@ -428,7 +446,7 @@ def pack_charts(
             method = "outlines"
     for i in np.flatnonzero(turns):
         # quarter turns (still a rotation: orientation kept), back into the box's corner
-        local[i] = _rotate(local[i], turns[i] * np.pi / 2)
+        local[i] = rotate_points(local[i], turns[i] * np.pi / 2)
         local[i] -= local[i].min(axis=0)
         t = rotations[i] + turns[i] * np.pi / 2
         rotations[i] = np.arctan2(np.sin(t), np.cos(t))

@@ -351,11 +351,11 @@ PACK_MIN_AREA_FRACTION: float = 0.1
 
 def _box(UV: np.ndarray, F: np.ndarray):
     """Minimum-area rectangle of a piece: rotated coordinates (all rows), min, extent, fill."""
-    from .atlas import _rotate, min_area_rotation
+    from .atlas import min_area_rotation, rotate_points
 
     used = np.unique(F)
     Q = np.zeros((len(UV), 2))
-    Q[used] = _rotate(UV[used], min_area_rotation(UV[used]))
+    Q[used] = rotate_points(UV[used], min_area_rotation(UV[used]))
     lo, ext = Q[used].min(axis=0), np.ptp(Q[used], axis=0)
     d1, d2 = UV[F[:, 1]] - UV[F[:, 0]], UV[F[:, 2]] - UV[F[:, 0]]
     area = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]).sum()

@@ -154,6 +154,11 @@ def run_loop(meshes: list[Path], src: Path, out: Path) -> tuple[float, int]:
     return time.perf_counter() - t, ok
 
 
+def _complete(out: Path) -> int:
+    """Complete output folders under ``out`` (os.walk: folders renamed meanwhile are skipped)."""
+    return sum("report.json" in files for _, _, files in os.walk(out))
+
+
 def run_batch_cli(src: Path, out: Path, workers: int, fresh: bool = True, kill_after=None):
     """``igl-heatseg batch SRC -o OUT --workers N``; with ``kill_after`` (a count), SIGKILL
     its process group once that many outputs are complete. Returns (seconds, summary or None)."""
@@ -167,7 +172,7 @@ def run_batch_cli(src: Path, out: Path, workers: int, fresh: bool = True, kill_a
         start_new_session=True,
     )
     if kill_after is not None:
-        while proc.poll() is None and len(list(out.rglob("report.json"))) < kill_after:
+        while proc.poll() is None and _complete(out) < kill_after:
             time.sleep(0.05)
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
@@ -249,7 +254,7 @@ def main() -> int:
     # resumption: kill the 2-worker batch a third of the way, restart
     out = work / "out_resume"
     t_killed, _ = run_batch_cli(src, out, 2, kill_after=len(meshes) // 3)
-    complete = len(list(out.rglob("report.json")))
+    complete = _complete(out)
     leftovers = len([p for p in out.rglob(".*.tmp")])
     t_rest, summary = run_batch_cli(src, out, 2, fresh=False)
     res["resume"] = {

@@ -34,7 +34,7 @@ from scipy.sparse.csgraph import connected_components
 from ..mesh.geometry import face_areas, face_normals
 from .model import SURFACE_KINDS, Surface
 from .select import fit_surface
-from .tolerance import vertex_tolerance
+from .tolerance import exact_tessellation, vertex_tolerance
 
 __all__ = [
     "SurfaceSegmentation",
@@ -91,22 +91,30 @@ PRECHECK_SAMPLES = 200
 UPGRADE_ANGLE = math.radians(40.0)
 
 #: Parameters of each kind, and how many samples beyond them a fit needs to count as evidence
-#: (a plane through 4 points has one redundant point; the curved kinds need two).
+#: (the curved kinds need two; a single triangle of a coarse export is a planar face).
 _PARAMS = {"plane": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
-MIN_EXTRA_SAMPLES = {"plane": 1, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 2}
+MIN_EXTRA_SAMPLES = {"plane": 0, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 2}
 
 #: A fit whose surface normals disagree (by more than GROW_ANGLE) with the face normals on more
-#: than this share of the segment's area does not explain the segment.
-NORMAL_OFF_SHARE = 0.05
+#: than this share of the segment's area does not explain the segment (a fan cap fitted as a
+#: torus with its cylinder ring: a third; the faces of a noisy small hole: up to a tenth).
+NORMAL_OFF_SHARE = 0.2
 
 #: A segment's fit may leave out faces off its surface up to this share of its area (a
 #: boundary one triangle off); beyond it the segment is not explained.
 TRIM_SHARE = 0.05
 
+#: ... tried when the whole segment's best fit is within TRIM_RMS x tol in RMS.
+TRIM_RMS = 2.0
+
 #: Rings of boundary faces left out of a segment's core fit, and the least share of the
 #: segment the core must keep.
 CORE_RINGS = 2
 CORE_MIN_SHARE = 0.3
+
+#: A core's surface stands for the whole segment when the segment's faces on it (corner RMS
+#: within GROW_TOL x tol) hold this share of its area; else the segment is split.
+CORE_EXPLAINS = 0.85
 
 #: A region-growing split is kept when at least SPLIT_GOOD_SHARE of the area is in pieces
 #: whose fit RMS is within SPLIT_RMS_RATIO x tol (measured: true faces 1e-6 tol on clean CAD
@@ -114,11 +122,15 @@ CORE_MIN_SHARE = 0.3
 SPLIT_RMS_RATIO = 0.65
 SPLIT_GOOD_SHARE = 0.6
 
+#: The same bar on a noisy mesh, whose true faces fit at 0.6-0.85 tol (region fits carry their
+#: boundaries' noise; measured on a noisy pipe elbow's cylinder and torus).
+SPLIT_RMS_RATIO_NOISY = 0.9
+
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
 
-#: Segments with fewer faces are fitted as freeform (a fit needs a few samples to mean anything).
-MIN_FIT_FACES = 2
+#: Segments with fewer faces are fitted as freeform.
+MIN_FIT_FACES = 1
 
 
 @dataclass
@@ -233,7 +245,7 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
     s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
-    if not s.is_analytic and s.rms <= tol and len(faces) >= 2 * MIN_REGION_FACES:
+    if not s.is_analytic and s.rms <= TRIM_RMS * tol and len(faces) >= 2 * MIN_REGION_FACES:
         s = _trimmed_fit(V, F, faces, tol, allowed, W, s) or s
     if s.is_analytic:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
@@ -311,10 +323,14 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
     """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface)."""
     region = np.zeros(len(F), dtype=bool)
     ring = np.array([seed])
-    patch = [seed]
-    for _ in range(SEED_RINGS):
-        ring = np.unique(TT[ring].ravel())
-        ring = ring[(ring >= 0) & free[np.maximum(ring, 0)]]
+    patch = np.array([seed])
+    for _ in range(SEED_RINGS):  # rings across smooth edges only: a patch must not span a crease
+        nb = TT[ring]
+        src = np.repeat(ring, 3)
+        nb = nb.ravel()
+        ok = (nb >= 0) & free[np.maximum(nb, 0)]
+        ok[ok] &= np.einsum("ij,ij->i", FN[src[ok]], FN[nb[ok]]) >= math.cos(UPGRADE_ANGLE)
+        ring = np.setdiff1d(np.unique(nb[ok]), patch)
         patch = np.union1d(patch, ring)
     s = _fit(V, F, np.asarray(patch), tol, W=W, FN=FN)
     if not s.is_analytic:
@@ -390,7 +406,10 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
         if not free[seed] or tried[seed]:
             continue
         grown, s = _grow_one(V, F, FN, TT, free, seed, tol, W)
-        if len(grown) < MIN_REGION_FACES:
+        # a rectangle of a coarse export is two triangles: a small region is kept when its
+        # surface fits it well inside the tolerance (noise shards are absorbed later)
+        exact = s.is_analytic and s.rms <= SPLIT_RMS_RATIO * tol and len(grown) >= 2
+        if len(grown) < MIN_REGION_FACES and not exact:
             tried[grown] = True
             continue
         out[grown] = r
@@ -551,13 +570,14 @@ def _core(F, labels, faces, TT) -> np.ndarray:
     return kept if len(kept) >= CORE_MIN_SHARE * len(faces) else faces
 
 
-def _real_split(V, F, parts, part_fits, tol) -> bool:
+def _real_split(V, F, parts, part_fits, tol, ratio=None) -> bool:
     """A split found real faces when most of the area lies in pieces fitted well inside the
-    tolerance (true faces fit to the noise level, 0.4 tol, or to round-off on a CAD mesh); a
-    smooth freeform surface shatters into pieces each just within it, and stays whole."""
+    tolerance (``ratio`` x tol: true faces of an exact tessellation fit to round-off); a smooth
+    freeform surface shatters into pieces each just within it, and stays whole."""
+    ratio = SPLIT_RMS_RATIO if ratio is None else ratio
     A = np.array([face_areas(V, F[p]).sum() for p in parts])
     r = np.array([f.rms / tol if f.is_analytic else np.inf for f in part_fits])
-    good = A[r <= SPLIT_RMS_RATIO].sum()
+    good = A[r <= ratio].sum()
     return bool(good >= SPLIT_GOOD_SHARE * A.sum())
 
 
@@ -673,6 +693,7 @@ def refine_segmentation(
     FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
     tol = vertex_tolerance(V, F) if tol is None else float(tol)
+    split_ratio = SPLIT_RMS_RATIO if exact_tessellation(V, F) else SPLIT_RMS_RATIO_NOISY
     timings["tolerance"] = time.perf_counter() - t0
 
     t = time.perf_counter()
@@ -689,13 +710,15 @@ def refine_segmentation(
             core = _core(F, labels, faces, TT)
             if len(core) < len(faces):
                 s_core = _fit(V, F, core, tol, W=W, FN=FN)
-                if _explains(s_core, tol):
+                A = face_areas(V, F[faces])
+                on = _corner_rms(V, F, faces, s_core) <= GROW_TOL * tol
+                if _explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
         if split and not _explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
             sub = grow_regions(V, F, faces, tol, FN, TT, W)
             parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
             part_fits = [_fit(V, F, part, tol, W=W, FN=FN) for part in parts]
-            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol):
+            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol, split_ratio):
                 n_split += 1
                 for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):
                     lab = k if r == 0 else nxt

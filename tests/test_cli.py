@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from igl_heatseg.cli import Progress, main
+from igl_heatseg.errors import MeshError
 from igl_heatseg.io.meshes import load_mesh
 
 
@@ -282,3 +283,20 @@ def test_output_on_a_read_only_file_system_is_one_line(tmp_path, data_dir, capsy
     rc = main(["segment", str(data_dir / "block.ply"), "-o", out, "--progress", "never"])
     err = capsys.readouterr().err.strip()
     assert rc == 2 and "\n" not in err and "cannot write the output folder" in err, err
+
+
+def test_warnings_before_an_error_fold_into_its_one_line(tmp_path, capsys, monkeypatch):
+    """A fuzzed STL made the heat solver warn, then fail: two lines on stderr. Now one."""
+    import logging
+
+    import igl_heatseg.cli.segment as seg_cmd
+
+    def warn_then_fail(args):
+        logging.getLogger("igl_heatseg.heat.exact").warning("heat fields sum to 1 only within 2e-06")
+        raise MeshError("case.stl: factorization of the heat system failed")
+
+    monkeypatch.setattr(seg_cmd, "run", warn_then_fail)
+    code = main(["segment", "case.stl", "-o", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "factorization" in err[0] and "after the warning: heat fields sum" in err[0]

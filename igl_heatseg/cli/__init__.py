@@ -63,18 +63,49 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    held = _HeldWarnings()
+    package = logging.getLogger("igl_heatseg")
+    if not args.verbose:
+        package.addHandler(held)
+        package.propagate = False
     try:
-        return int(args.func(args) or 0)
-    except (MeshError, ValueError) as exc:
-        print(f"igl-heatseg: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"igl-heatseg: error: {exc}", file=sys.stderr)
+        code = int(args.func(args) or 0)
+        held.flush_to(sys.stderr)
+        return code
+    except (MeshError, ValueError, OSError) as exc:
+        print(f"igl-heatseg: error: {exc}{held.summary()}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("igl-heatseg: interrupted", file=sys.stderr)
         return 130
+    finally:
+        package.removeHandler(held)
+        package.propagate = True
 
+
+class _HeldWarnings(logging.Handler):
+    """The package's warnings while a command runs: printed after it when it succeeds, folded
+    into the one error line when it fails (bad input is one line on stderr, whatever the
+    library warned about on its way to the error)."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record)
+
+    def flush_to(self, stream) -> None:
+        for r in self.records:
+            stream.write(f"{r.name}: {r.getMessage()}\n")
+        self.records.clear()
+
+    def summary(self) -> str:
+        if not self.records:
+            return ""
+        first = " ".join(self.records[0].getMessage().split())
+        more = f" and {len(self.records) - 1} more" if len(self.records) > 1 else ""
+        return f" (after the warning: {first}{more})"
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -292,7 +292,8 @@ def test_warnings_before_an_error_fold_into_its_one_line(tmp_path, capsys, monke
     import igl_heatseg.cli.segment as seg_cmd
 
     def warn_then_fail(args):
-        logging.getLogger("igl_heatseg.heat.exact").warning("heat fields sum to 1 only within 2e-06")
+        log = logging.getLogger("igl_heatseg.heat.exact")
+        log.warning("heat fields sum to 1 only within 2e-06")
         raise MeshError("case.stl: factorization of the heat system failed")
 
     monkeypatch.setattr(seg_cmd, "run", warn_then_fail)

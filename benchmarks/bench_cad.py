@@ -375,6 +375,9 @@ def main(argv=None) -> int:
     ap.add_argument("--set", choices=("all", "subset"), default="all")
     ap.add_argument("--m2c-venv", type=Path, default=Path("/work/m2c"))
     ap.add_argument("--tools", nargs="+", default=["ours", "mesh2cad"])
+    ap.add_argument("--parts", nargs="+", metavar="NAME", default=None,
+                    help="run only these parts, in this order (e.g. a second process on the "
+                    "last parts of the list); the table still lists the whole set")
     ap.add_argument("--table", action="store_true", help="only write the table from the cache")
     ap.add_argument("--rescore", action="store_true",
                     help="only score cached results again where the surface samples are missing")
@@ -385,9 +388,11 @@ def main(argv=None) -> int:
     work = args.work.resolve()
     work.mkdir(parents=True, exist_ok=True)
     parts = list_parts(args.set, work)
+    todo = parts if args.parts is None else \
+        [next(p for p in parts if p["name"] == n) for n in args.parts]
     if args.rescore:
         for tool in args.tools:
-            run_queue(tool, parts, work, None)
+            run_queue(tool, todo, work, None)
     elif not args.table:
         queues = []
         if "mesh2cad" in args.tools:
@@ -395,10 +400,10 @@ def main(argv=None) -> int:
             ver = subprocess.run([str(exe), "--version"], capture_output=True, text=True)
             (work / "m2c-version.txt").write_text(ver.stdout.strip() or ver.stderr.strip())
             queues.append(threading.Thread(target=run_queue, args=(
-                "mesh2cad", parts, work, lambda p: run_m2c(p, work, exe))))
+                "mesh2cad", todo, work, lambda p: run_m2c(p, work, exe))))
         if "ours" in args.tools:
             queues.append(threading.Thread(target=run_queue, args=(
-                "ours", parts, work, lambda p: run_ours(p, work))))
+                "ours", todo, work, lambda p: run_ours(p, work))))
         for q in queues:
             q.start()
         for q in queues:

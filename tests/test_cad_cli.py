@@ -110,10 +110,19 @@ def test_without_ocp_one_line_with_the_install_hint(monkeypatch, cube_obj, tmp_p
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
-def test_batch_has_the_cad_job_kind():
+def test_batch_has_the_cad_job_kind(cube_obj, tmp_path):
     kind = JOB_KINDS["cad"]
     assert kind.run is cad_file and "tol" in kind.options and kind.pictures == ("brep.png",)
     assert kind.summarize({"faces": 12, "segments": 6}) == {"faces": 12, "segments": 6}
+    pytest.importorskip("dask")
+    from igl_heatseg.batch import process_mesh
+
+    out = tmp_path / "task-cad"
+    rec = process_mesh({"mesh": "cube.obj", "input": str(cube_obj[0]), "output": str(out),
+                        "kind": "cad", "options": {"pictures": False, "mode": "robust"},
+                        "timeout": 300})
+    assert rec["status"] == "done", rec
+    assert len(faces_of(read_step(out / "model.step"))) == 6
 
 
 def test_brep_picture_helpers():

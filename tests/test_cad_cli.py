@@ -126,9 +126,10 @@ def test_batch_has_the_cad_job_kind(cube_obj, tmp_path):
 
 
 def test_brep_picture_helpers():
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+
     from igl_heatseg.cad import tessellate_by_type
     from igl_heatseg.viz.brep import brep_type_colors, face_border_edges
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
 
     TV, TF, tri_face, types = tessellate_by_type(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape(), 0.01)
     assert sorted(types) == ["cylinder", "plane", "plane"] and len(tri_face) == len(TF)

@@ -4,8 +4,9 @@ The command line (:mod:`igl_heatseg.cli.segment`, :mod:`igl_heatseg.cli.run`) an
 worker call the same functions here, so a batch writes into ``OUT/<mesh>/`` exactly what the
 single-mesh command writes. Nothing here imports Dask.
 
-:data:`JOB_KINDS` is the table of job kinds ``igl-heatseg batch --command`` accepts (``segment``,
-``run``, ``cad``: segment, fit surfaces, write a STEP file). A new kind is one :class:`JobKind` entry: a
+:data:`JOB_KINDS` is the table of job kinds ``igl-heatseg batch --command`` accepts
+(``segment``, ``run``, ``cad``: segment, fit surfaces, write a STEP file). A new kind is one
+:class:`JobKind` entry: a
 ``run(mesh_path, out_dir, **options) -> report`` function writing through
 :func:`~igl_heatseg.io.atomic_dir`, and a ``summarize(report) -> dict`` picking the summary
 columns from its report.

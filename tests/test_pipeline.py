@@ -237,7 +237,7 @@ def test_run_with_pictures(can_mesh, tmp_path):
 
 
 def test_degenerate_map_is_left_out_of_the_atlas(can_mesh, monkeypatch):
-    import igl_heatseg.pipeline as pipeline_mod
+    import igl_heatseg.pipeline.stages as pipeline_mod
 
     real = pipeline_mod.parameterize_chart
 
@@ -275,3 +275,28 @@ def test_compose_user_path_then_auto_cut():
     assert res.cut_length > first.cut_length
     assert len(res.cut_edges) == len(np.unique(np.sort(res.cut_edges, axis=1), axis=0))
     assert res.method == "paths+annulus"
+
+
+def test_stages_by_hand_give_the_pipeline_s_report(can_mesh):
+    """run_pipeline is its stages in order; the report is generated from the typed charts."""
+    from igl_heatseg.pipeline import cut_charts, extract_charts, pack, parameterize_charts
+
+    res = run_pipeline(can_mesh)
+    charts = extract_charts(can_mesh, res.segmentation.labels, with_topology=False)
+    charts, _, _ = parameterize_charts(can_mesh, cut_charts(can_mesh, charts))
+    corner_uv, atlas = pack(can_mesh, charts)
+
+    def untimed(r):  # attempts hold timings too
+        if isinstance(r, list):
+            return [untimed(x) for x in r]
+        if isinstance(r, dict):
+            return {k: untimed(v) for k, v in r.items() if not k.endswith("seconds")}
+        return r
+
+    assert [untimed(c.to_report()) for c in charts] == [untimed(r) for r in res.report["charts"]]
+    assert np.array_equal(corner_uv, res.corner_uv) and atlas.fill == res.atlas.fill
+    side = side_chart(res)
+    assert side.report == side.to_report() and side.report["topology"]["genus"] == 0
+    with pytest.raises(AttributeError):
+        side.report = {}
+    assert set(res.report) == {"charts", "parameterization", "timings"}

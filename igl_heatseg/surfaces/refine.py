@@ -693,7 +693,8 @@ def refine_segmentation(
     FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
     tol = vertex_tolerance(V, F) if tol is None else float(tol)
-    split_ratio = SPLIT_RMS_RATIO if exact_tessellation(V, F) else SPLIT_RMS_RATIO_NOISY
+    exact = exact_tessellation(V, F)
+    split_ratio = SPLIT_RMS_RATIO if exact else SPLIT_RMS_RATIO_NOISY
     timings["tolerance"] = time.perf_counter() - t0
 
     t = time.perf_counter()
@@ -705,8 +706,9 @@ def refine_segmentation(
         progress("fit", i / max(len(ks), 1))
         faces = np.flatnonzero(labels == k)
         s = _fit(V, F, faces, tol, W=W, FN=FN)
-        if not _explains(s, tol):
-            # a noisy boundary carries a few of the neighbours' faces: fit the core
+        if not _explains(s, tol) and not exact:
+            # a noisy boundary carries a few of the neighbours' faces: fit the core (an exact
+            # tessellation's boundaries are exact: there a segment off its surface is split)
             core = _core(F, labels, faces, TT)
             if len(core) < len(faces):
                 s_core = _fit(V, F, core, tol, W=W, FN=FN)

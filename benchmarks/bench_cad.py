@@ -318,8 +318,8 @@ def write_table(parts: list[dict], work: Path, md: Path, command: str) -> str:
         "side by side, one process each, so their seconds include waiting for a core",
         f"- command: `{command}`",
         f"- ours: `igl-heatseg cad PART.obj -o DIR --no-pictures` (robust mode, default "
-        "tolerance 1 % of the bbox diagonal); mesh2cad "
-        f"{m2c_version}: `mesh2cad convert PART.obj -o PART.step` (defaults), "
+        "tolerance 1 % of the bbox diagonal); "
+        f"{m2c_version or 'mesh2cad'}: `mesh2cad convert PART.obj -o PART.step` (defaults), "
         f"timeout {M2C_TIMEOUT} s",
         "- both STEP files read back with `read_step` and scored by `brep_fidelity` against "
         "the mesh given to the tool: Hausdorff is `brep_fidelity`'s two-sided distance (mesh "

@@ -245,7 +245,9 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
     s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
-    if not s.is_analytic and s.rms <= TRIM_RMS * tol and len(faces) >= 2 * MIN_REGION_FACES:
+    if not s.is_analytic and len(faces) >= 2 * MIN_REGION_FACES and (
+        s.rms <= TRIM_RMS * tol or np.isfinite(s.rms)
+    ):  # a stray face of an exact tessellation puts the RMS far above tol: trim anyway
         s = _trimmed_fit(V, F, faces, tol, allowed, W, s) or s
     if s.is_analytic:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
@@ -269,12 +271,24 @@ def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface) -> Surface | None:
     loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
     if not loose.is_analytic:
         return None
-    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-    keep = d <= GROW_TOL * tol
     A = face_areas(V, F[faces])
-    if A[~keep].sum() > TRIM_SHARE * A.sum() or keep.sum() < 2 * MIN_REGION_FACES:
+    # one least-trimmed-squares step: the stray faces tilt the loose fit, so rank the faces by
+    # their distance to it, refit without the worst TRIM_SHARE of the area, then check
+    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    order = np.argsort(d, kind="stable")
+    keep = np.zeros(len(faces), dtype=bool)
+    keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
+    if keep.sum() < 2 * MIN_REGION_FACES:
         return None
     P, N, w = vertex_samples(V, F, faces[keep], W)
+    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
+    if not s.is_analytic:
+        return None
+    d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    on = d <= GROW_TOL * tol
+    if A[~on].sum() > TRIM_SHARE * A.sum():
+        return None
+    P, N, w = vertex_samples(V, F, faces[on], W)
     s = fit_surface(P, N, w, tol=tol, kinds=kinds)
     return s if s.is_analytic else None
 

@@ -104,8 +104,13 @@ NORMAL_OFF_SHARE = 0.2
 #: boundary one triangle off); beyond it the segment is not explained.
 TRIM_SHARE = 0.05
 
-#: ... tried when the whole segment's best fit is within TRIM_RMS x tol in RMS.
+#: ... tried on segments of TRIM_MIN_FACES faces or more whose best fit is within TRIM_RMS x
+#: tol, or TRIM_REL x the segment's size, in RMS (one stray face of an exact tessellation: 17
+#: tol, 0.2 % of the size). Trimming every unexplained fit (unions, seed patches) tripled the
+#: run time.
 TRIM_RMS = 2.0
+TRIM_REL = 0.01
+TRIM_MIN_FACES = 50
 
 #: Rings of boundary faces left out of a segment's core fit, and the least share of the
 #: segment the core must keep.
@@ -245,9 +250,9 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
     s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
-    if not s.is_analytic and len(faces) >= 2 * MIN_REGION_FACES and (
-        s.rms <= TRIM_RMS * tol or np.isfinite(s.rms)
-    ):  # a stray face of an exact tessellation puts the RMS far above tol: trim anyway
+    if not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
+        TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
+    ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
         s = _trimmed_fit(V, F, faces, tol, allowed, W, s) or s
     if s.is_analytic:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have

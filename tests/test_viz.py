@@ -215,9 +215,14 @@ def test_surface_type_palette_is_fixed_and_covers_every_kind():
 
 def test_surface_types_from_surfaces_else_primitive_types(box, box_robust):
     _, paper = box
+    # robust mode fits a surface per segment: the box is six planes
+    assert viz.segment_surface_types(box_robust) == [s.kind for s in box_robust.surfaces]
+    assert viz.segment_surface_types(box_robust) == ["plane"] * 6
+    untyped = copy.copy(box_robust)  # without fitted surfaces: robust mode's primitive types
+    untyped.surfaces = None
     expected = [t.lower() for t in box_robust.primitive_types]
     assert len(expected) == 6 and set(expected) <= {"plane", "cylinder", "sphere", "other"}
-    assert viz.segment_surface_types(box_robust) == expected
+    assert viz.segment_surface_types(untyped) == expected
     with pytest.raises(ValueError, match="needs .* robust mode"):
         viz.segment_surface_types(paper)
     typed = copy.copy(box_robust)  # fitted surfaces win over robust mode's primitive types
@@ -228,7 +233,7 @@ def test_surface_types_from_surfaces_else_primitive_types(box, box_robust):
     typed.surfaces = typed.surfaces[:5]
     with pytest.raises(ValueError, match="5 surface types for 6 segments"):
         viz.segment_surface_types(typed)
-    typed = copy.copy(box_robust)
+    typed = copy.copy(untyped)
     typed.primitive_types = ["Plane"] * 5 + ["Blob"]
     with pytest.raises(ValueError, match="unknown surface types"):
         viz.segment_surface_types(typed)

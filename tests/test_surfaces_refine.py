@@ -85,7 +85,8 @@ def test_robust_segment_writes_surfaces_and_face_types(tmp_path):
         "".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V)
         + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
     )
-    assert main(["segment", str(path), "-o", str(tmp_path / "out"), "--mode", "robust"]) == 0
+    out = str(tmp_path / "out")
+    assert main(["segment", str(path), "-o", out, "--mode", "robust", "--refine"]) == 0
     report = json.loads((tmp_path / "out" / "report.json").read_text())
     kinds = [s["type"] for s in report["surfaces"]]
     assert len(kinds) == report["segments"] == 3

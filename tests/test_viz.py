@@ -90,7 +90,7 @@ def box_charts(box):
 @pytest.fixture(scope="module")
 def box_robust(box):
     mesh, _ = box
-    return segment_robust(mesh)
+    return segment_robust(mesh, refine=True)
 
 
 def surfaces_of_every_kind():

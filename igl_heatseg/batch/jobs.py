@@ -120,6 +120,7 @@ def segment_file(
     solver: str = "fast",
     repair: bool = False,
     progress=None,
+    refine: bool = False,
 ) -> JobOutput:
     """Load, segment and write one mesh: what ``igl-heatseg segment MESH -o OUT`` does.
 
@@ -130,7 +131,7 @@ def segment_file(
     out : str or path-like
         Output folder, written atomically (:func:`~igl_heatseg.io.atomic_dir`): ``labels.txt``,
         ``vertex_labels.txt``, ``segmented.ply``, ``report.json`` (written last).
-    mode, theta, eps, solver
+    mode, theta, eps, solver, refine
         As for :func:`~igl_heatseg.segmentation.segment_with_mode`.
     repair : bool
         ``load_mesh(mesh_path, repair=True)``.
@@ -153,7 +154,8 @@ def segment_file(
     if progress is not None:
         progress = _sized(progress, mesh.F.shape[0])
         progress("loading", 1.0)
-    seg = named(mesh, segment_with_mode, mesh, mode, theta, eps, progress=progress, solver=solver)
+    seg = named(mesh, segment_with_mode, mesh, mode, theta, eps, progress=progress, solver=solver,
+                refine=refine)
     extra = {"input": str(Path(mesh_path).resolve()), "timings": {"load": t_load}}
     extra.update(input_report(mesh, seg.labels))
     with atomic_dir(out) as tmp:
@@ -447,7 +449,7 @@ JOB_KINDS: dict[str, JobKind] = {
         "segment",
         segment_file,
         _summarize_segment,
-        ("mode", "theta", "eps", "solver", "repair"),
+        ("mode", "theta", "eps", "solver", "repair", "refine"),
         warm_up=_warm_segment,
     ),
     "run": JobKind(

@@ -29,6 +29,7 @@ def run(args: argparse.Namespace) -> int:
         theta=args.theta,
         eps=args.eps,
         solver=args.solver,
+        refine=args.refine,
         repair=bool(getattr(args, "repair", False)),
         progress=progress_for(args),
     )
@@ -55,6 +56,13 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
     add_segment_arguments(p)
     add_solver_argument(p)
+    p.add_argument(
+        "--refine",
+        action="store_true",
+        help="robust mode: refine the segments by their surface fits (split what no surface "
+        "explains, merge what one explains, move boundaries onto the surfaces); off by default: "
+        "it fixes coarse CAD exports but passed fewer of the generated tuning parts",
+    )
     add_repair_argument(p)
     add_progress_argument(p)
     p.set_defaults(func=run)

@@ -21,6 +21,7 @@ def segment_with_mode(
     progress: Progress | None = None,
     solver: str = "fast",
     keep_solvers: bool = False,
+    refine: bool = False,
 ) -> Segmentation:
     """Segment in the paper's mode or in robust mode, with each mode's own defaults.
 
@@ -37,6 +38,9 @@ def segment_with_mode(
         Heat solver (both modes).
     keep_solvers : bool
         Paper mode: keep the factorizations for :meth:`Segmentation.temperature`.
+    refine : bool
+        Robust mode: refine the segments by their surface fits
+        (:func:`~igl_heatseg.segmentation.robust.segment_robust`); ignored in paper mode.
 
     Returns
     -------
@@ -53,7 +57,7 @@ def segment_with_mode(
         return segment_mesh(
             mesh, theta, eps, progress=progress, solver=solver, keep_solvers=keep_solvers
         )
-    return segment_robust(mesh, theta, eps, solver=solver, progress=progress)
+    return segment_robust(mesh, theta, eps, solver=solver, progress=progress, refine=refine)
 
 
 def segment(
@@ -65,6 +69,7 @@ def segment(
     mode: str = "paper",
     solver: str = "fast",
     progress: Progress | None = None,
+    refine: bool = False,
 ) -> Segmentation:
     """Segment a mesh: the package's main entry point.
 
@@ -79,6 +84,8 @@ def segment(
     mode : {"paper", "robust"}
     solver : {"fast", "exact"}
     progress : callable(stage, fraction), optional
+    refine : bool
+        Robust mode: refine the segments by their surface fits.
 
     Returns
     -------
@@ -94,4 +101,5 @@ def segment(
     1
     """
     mesh = V if isinstance(V, CleanMesh) and F is None else validate_mesh(V, F)
-    return segment_with_mode(mesh, mode, theta, eps, progress=progress, solver=solver)
+    return segment_with_mode(mesh, mode, theta, eps, progress=progress, solver=solver,
+                             refine=refine)

@@ -228,7 +228,7 @@ def segment_mesh(
     Parameters
     ----------
     mesh : CleanMesh
-        From :func:`igl_heatseg.io.meshes.load_mesh` or :func:`igl_heatseg.mesh.checks.validate_mesh`.
+        From :func:`igl_heatseg.io.load_mesh` or :func:`igl_heatseg.mesh.validate_mesh`.
     theta : float
         Dihedral threshold in radians, ``0 < theta <= pi`` (default pi/20, paper Table 1).
     eps : float

@@ -47,7 +47,7 @@ MODE_DEFAULTS: dict[str, tuple[float, float, str]] = {
 
 
 def check_segment_params(theta: float, eps: float) -> None:
-    """Raise :class:`~igl_heatseg.errors.MeshError` unless ``0 < theta <= pi`` and ``0 <= eps <= 1``.
+    """Raise :class:`~igl_heatseg.errors.MeshError` unless ``0 < theta <= pi``, ``0 <= eps <= 1``.
 
     Examples
     --------

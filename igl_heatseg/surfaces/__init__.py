@@ -7,7 +7,7 @@ returns :class:`Surface` objects and new labels. Imports only from ``mesh`` and 
 
 from .model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
 from .primitives import fit_cone, fit_cylinder, fit_plane, fit_sphere, fit_torus
-from .refine import SurfaceSegmentation, refine_segmentation, segment_adjacency
+from .refine import SurfaceSegmentation, fit_segments, refine_segmentation, segment_adjacency
 from .samples import face_residuals, face_samples
 from .select import fit_surface, surface_residual, within_tolerance
 from .tolerance import fit_tolerance, noise_level, vertex_tolerance
@@ -15,5 +15,5 @@ from .tolerance import fit_tolerance, noise_level, vertex_tolerance
 __all__ = ["SURFACE_KINDS", "ANALYTIC_KINDS", "Surface", "fit_plane", "fit_sphere",
            "fit_cylinder", "fit_cone", "fit_torus", "fit_surface", "surface_residual",
            "within_tolerance", "face_samples", "face_residuals", "noise_level", "fit_tolerance",
-           "vertex_tolerance", "SurfaceSegmentation", "refine_segmentation",
+           "vertex_tolerance", "SurfaceSegmentation", "refine_segmentation", "fit_segments",
            "segment_adjacency"]

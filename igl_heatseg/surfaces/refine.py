@@ -33,10 +33,12 @@ from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, face_normals
 from .model import SURFACE_KINDS, Surface
+from .samples import segment_adjacency, vertex_samples
 from .select import fit_surface
 from .tolerance import exact_tessellation, vertex_tolerance
 
 __all__ = [
+    "fit_segments",
     "SurfaceSegmentation",
     "refine_segmentation",
     "segment_adjacency",
@@ -166,77 +168,6 @@ class SurfaceSegmentation:
     merged: int = 0
     moved: int = 0
     timings: dict = field(default_factory=dict)
-
-
-def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Faces on both sides of every interior edge whose two labels differ (each edge once).
-
-    Parameters
-    ----------
-    F : (m, 3) int64
-    labels : (m,) int64
-
-    Returns
-    -------
-    fa, fb : (e,) int64
-        ``fa < fb``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> F = np.array([[0, 1, 2], [2, 1, 3]])
-    >>> fa, fb = segment_adjacency(F, np.array([0, 1]))
-    >>> fa.tolist(), fb.tolist()
-    ([0], [1])
-    """
-    TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
-    fa = np.repeat(np.arange(len(F)), 3)
-    fb = TT.ravel()
-    keep = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])
-    return fa[keep], fb[keep]
-
-
-def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray, W: np.ndarray | None = None):
-    """Samples to fit a face set: its vertices, with normals from those faces only.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    faces : (k,) int64
-        Face ids.
-    W : (n, 3) float64, optional
-        Positions the normals are computed from (e.g. a denoised copy of ``V``); default ``V``.
-
-    Returns
-    -------
-    P : (p, 3) float64
-        The faces' vertices.
-    N : (p, 3) float64
-        Area-weighted vertex normals of the face set (a crease with a neighbour does not bend
-        them).
-    w : (p,) float64
-        A third of the incident faces' areas (sums to the set's area).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
-    >>> P, N, w = vertex_samples(V, np.array([[0, 1, 2], [1, 3, 2]]), np.array([0, 1]))
-    >>> P.shape, round(float(w.sum()), 12), N[0].tolist()
-    ((4, 3), 1.0, [0.0, 0.0, 1.0])
-    """
-    Fs = F[faces]
-    verts, inv = np.unique(Fs, return_inverse=True)
-    inv = inv.reshape(-1, 3)
-    A = face_areas(V, Fs)
-    FN = face_normals(V if W is None else W, Fs)
-    AN = np.repeat(FN * A[:, None], 3, axis=0)  # one row per corner
-    N = np.stack([np.bincount(inv.ravel(), weights=AN[:, c], minlength=len(verts))
-                  for c in range(3)], axis=1)
-    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
-    w = np.bincount(inv.ravel(), weights=np.repeat(A / 3.0, 3), minlength=len(verts))
-    return V[verts], N, w
 
 
 def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
@@ -789,3 +720,46 @@ def refine_segmentation(
     log.info("surfaces: %d segments (%d split, %d merges, %d faces moved), tol %.3g",
              len(surfaces), n_split, merged, moved, tol)
     return SurfaceSegmentation(labels, surfaces, tol, n_split, merged, moved, timings)
+
+
+def fit_segments(
+    V: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    tol: float | None = None,
+    normals_from: np.ndarray | None = None,
+) -> list:
+    """One fitted surface per segment, the labels as they are.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    tol : float, optional
+        Default :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance`.
+    normals_from : (n, 3) float64, optional
+        Positions the normals come from (a denoised copy of ``V``).
+
+    Returns
+    -------
+    surfaces : list of Surface, length k
+        Fitted at the vertices, a few stray boundary faces trimmed (as in
+        :func:`refine_segmentation`).
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V, F = igl.loop(*igl.icosahedron(), 3)
+    >>> V /= np.linalg.norm(V, axis=1, keepdims=True)
+    >>> [s.kind for s in fit_segments(V, F, np.zeros(len(F), dtype=np.int64))]
+    ['sphere']
+    """
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
+    tol = vertex_tolerance(V, F) if tol is None else float(tol)
+    FN = face_normals(V if W is None else W, F)
+    k = int(labels.max()) + 1 if len(labels) else 0
+    return [_fit(V, F, np.flatnonzero(labels == i), tol, W=W, FN=FN) for i in range(k)]

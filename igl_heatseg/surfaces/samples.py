@@ -7,10 +7,13 @@ from __future__ import annotations
 import igl
 import numpy as np
 
+from ..mesh.geometry import face_areas, face_normals
 from .checks import check_faces, check_mesh
 from .model import Surface
 
-__all__ = ["face_samples", "face_residuals"]
+__all__ = [
+    "segment_adjacency",
+    "vertex_samples","face_samples", "face_residuals"]
 
 
 # ----------------------------------------------------------------------------- mesh helpers
@@ -102,3 +105,74 @@ def face_residuals(V, F, faces, surface: Surface) -> np.ndarray:
     pts = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
     d = surface.distance(pts.reshape(-1, 3)).reshape(len(Fs), 4)
     return np.max(np.abs(d), axis=1)
+
+
+def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Faces on both sides of every interior edge whose two labels differ (each edge once).
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+
+    Returns
+    -------
+    fa, fb : (e,) int64
+        ``fa < fb``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [2, 1, 3]])
+    >>> fa, fb = segment_adjacency(F, np.array([0, 1]))
+    >>> fa.tolist(), fb.tolist()
+    ([0], [1])
+    """
+    TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
+    fa = np.repeat(np.arange(len(F)), 3)
+    fb = TT.ravel()
+    keep = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])
+    return fa[keep], fb[keep]
+
+
+def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray, W: np.ndarray | None = None):
+    """Samples to fit a face set: its vertices, with normals from those faces only.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (k,) int64
+        Face ids.
+    W : (n, 3) float64, optional
+        Positions the normals are computed from (e.g. a denoised copy of ``V``); default ``V``.
+
+    Returns
+    -------
+    P : (p, 3) float64
+        The faces' vertices.
+    N : (p, 3) float64
+        Area-weighted vertex normals of the face set (a crease with a neighbour does not bend
+        them).
+    w : (p,) float64
+        A third of the incident faces' areas (sums to the set's area).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> P, N, w = vertex_samples(V, np.array([[0, 1, 2], [1, 3, 2]]), np.array([0, 1]))
+    >>> P.shape, round(float(w.sum()), 12), N[0].tolist()
+    ((4, 3), 1.0, [0.0, 0.0, 1.0])
+    """
+    Fs = F[faces]
+    verts, inv = np.unique(Fs, return_inverse=True)
+    inv = inv.reshape(-1, 3)
+    A = face_areas(V, Fs)
+    FN = face_normals(V if W is None else W, Fs)
+    AN = np.repeat(FN * A[:, None], 3, axis=0)  # one row per corner
+    N = np.stack([np.bincount(inv.ravel(), weights=AN[:, c], minlength=len(verts))
+                  for c in range(3)], axis=1)
+    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    w = np.bincount(inv.ravel(), weights=np.repeat(A / 3.0, 3), minlength=len(verts))
+    return V[verts], N, w

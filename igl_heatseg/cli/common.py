@@ -80,10 +80,10 @@ def add_segment_arguments(p: argparse.ArgumentParser) -> None:
         "--mode",
         choices=MODES,
         default="paper",
-        help="paper: the paper's method, faithful (default); robust: the heat segmentation on "
-        "denoised normals refined by surface fits (segments split, merged and their "
-        "boundaries moved until each is one plane, cylinder, cone, sphere, torus or freeform "
-        "face; report.json gets a `surfaces` list, segmented.ply a per-face surface_type)",
+        help="paper: the paper's method, faithful (default); robust: for noisy scans and "
+        "blends (denoised normals, curvature-class seeds, part-relative eps, primitive "
+        "merging), with one fitted surface per segment (report.json `surfaces`, segmented.ply "
+        "surface_type; `segment --refine` also refines the segments by the fits)",
     )
     p.add_argument(
         "--theta",

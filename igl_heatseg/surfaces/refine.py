@@ -184,7 +184,7 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     if not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
         TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
     ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
-        s = _trimmed_fit(V, F, faces, tol, allowed, W, s) or s
+        s = _trimmed_fit(V, F, faces, tol, allowed, W, s, (P, N, w)) or s
     if s.is_analytic:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
         # three (radius, height) profile points, which a torus always passes through. The face
@@ -198,12 +198,12 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     return s
 
 
-def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface) -> Surface | None:
+def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface | None:
     """A segment whose best surface is within tolerance in RMS but not in its largest deviation
     usually holds a few faces of a neighbour (a boundary a triangle off): fit without the faces
     whose corners are off that surface, when they are at most TRIM_SHARE of the area. The
     boundary moves then hand those faces to the neighbour they lie on."""
-    P, N, w = vertex_samples(V, F, faces, W)
+    P, N, w = samples  # the faces' vertex samples, as _fit took them
     loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
     if not loose.is_analytic:
         return None

@@ -68,6 +68,7 @@ from .paper import (
     group_components,
     group_seedless_components,
     heat_round,
+    make_face_connected,
 )
 from .params import ROBUST_EPS, ROBUST_THETA, check_segment_params, check_solver, eps_keep
 from .seeds import dihedral_deviation
@@ -79,6 +80,9 @@ __all__ = [
     "denoise_vertices",
     "curvature_classes",
     "split_along_creases",
+    "subdivision_levels",
+    "starved_share",
+    "snap_to_creases",
     "merge_by_primitives",
     "fit_plane",
     "fit_sphere",
@@ -139,6 +143,17 @@ MERGE_RATIO: float = 1.3
 #: Additive slack of the relative test, as a fraction of the absolute tolerance.
 MERGE_SLACK: float = 0.1
 
+#: A mesh is too coarse for vertex seeds when faces with no vertex off the creases hold more
+#: than this share of the area (a CAD export that puts every vertex on a face's outline:
+#: measured ~1 on coarse exports, below 0.2 on meshes of 2,000 faces and more).
+STARVED_SHARE: float = 0.1
+
+#: At most this many levels of midpoint subdivision ...
+MAX_SUBDIVIDE: int = 2
+
+#: ... and no more faces than this after it.
+MAX_SUBDIVIDED_FACES: int = 400_000
+
 #: Fewer points than this cannot be typed (``"Other"``).
 _MIN_FIT_POINTS = 8
 
@@ -159,7 +174,11 @@ class RobustSegmentation(Segmentation):
     vertex_class : (n,) int64
         0 flat, 1 cylindrical, 2 umbilic (step 3 of the module docstring).
     denoised_V : (n, 3) float64
-        The surface the heat fields were solved on.
+        The surface the heat fields were solved on (before any subdivision).
+    subdivided : int
+        Levels of midpoint subdivision the seeds and heat fields were computed on (0: the
+        input's own faces; then ``seed_mask``, ``seed_group``, ``final_group`` and
+        ``vertex_class`` are those of the input's vertices in the subdivided mesh).
     surfaces : list of Surface, length k, or None
         The fitted surface of every segment (:mod:`igl_heatseg.surfaces`), when fitted.
     """
@@ -169,6 +188,7 @@ class RobustSegmentation(Segmentation):
     primitive_rms: np.ndarray | None = None
     vertex_class: np.ndarray | None = None
     denoised_V: np.ndarray | None = None
+    subdivided: int = 0
 
 
 # --------------------------------------------------------------------------------------------
@@ -547,6 +567,7 @@ def segment_robust(
     merge: bool = True,
     fit_surfaces: bool = True,
     refine: bool = False,
+    subdivide: int | None = None,
     solver: str = "fast",
     progress=None,
 ) -> RobustSegmentation:
@@ -583,7 +604,12 @@ def segment_robust(
         (:func:`igl_heatseg.surfaces.refine_segmentation`: split what no surface explains, merge
         what one explains, move boundary faces to the surface they lie on). Off by default:
         on the 40 generated tuning parts it passed fewer parts (16 against 23 at purity >= .90
-        and coverage >= .85), though it fixes coarse CAD exports (one segment without it).
+        and coverage >= .85).
+    subdivide : int, optional
+        Levels of midpoint subdivision (``igl.upsample``, each face into 4; the geometry does
+        not change) the seeds and heat fields are computed on; the labels come back to the
+        input's faces by majority of their children.  Default: as many as a coarse CAD export
+        needs to have seeds at all (:func:`subdivision_levels`), 0 on a dense mesh.
     solver : {"fast", "exact"}
         Heat solver, as in :func:`igl_heatseg.segmentation.paper.segment_mesh`.
     progress : callable(stage, fraction), optional
@@ -604,6 +630,8 @@ def segment_robust(
     check_solver(solver)
     if crease_dilation < 0 or curvature_ring < 1:
         raise MeshError("crease_dilation must be >= 0 and curvature_ring >= 1")
+    if subdivide is not None and not 0 <= subdivide <= MAX_SUBDIVIDE:
+        raise MeshError(f"subdivide must be in [0, {MAX_SUBDIVIDE}], got {subdivide!r}")
     V, F = mesh.V, mesh.F
     n = V.shape[0]
     timings: dict[str, float] = {}
@@ -639,6 +667,17 @@ def segment_robust(
             crease = crease | ((adj @ crease.astype(np.float64)) > 0)
         seed &= ~crease
     band = off_crease & ~seed  # near a crease: no seed of its own, but not on the crease
+    if subdivide is None:
+        subdivide = subdivision_levels(W, F, theta)
+    if subdivide > 0:
+        return _on_subdivision(
+            mesh, W, int(subdivide), sharp, noise_angle, timings,
+            dict(theta=theta, eps=eps, sigma_r=sigma_r, flat_curvature=flat_curvature,
+                 anisotropy=anisotropy, axis_angle=axis_angle,
+                 flat_normal_angle=flat_normal_angle, crease_dilation=crease_dilation,
+                 curvature_ring=curvature_ring, solver=solver, progress=progress),
+            merge, fit_surfaces, refine,
+        )
     F2, orig = split_along_creases(F, sharp, topo)
     cls2, axis2 = curvature_classes(W[orig], F2, h, flat_curvature, anisotropy, curvature_ring)
     # a seed vertex lies on no crease, so it has exactly one copy
@@ -689,42 +728,16 @@ def segment_robust(
     timings["heat_final"] = time.perf_counter() - t
 
     k1 = len(kept)
-    merged_primitives = 0
     if merge:
         t = time.perf_counter()
         tol = (MERGE_TOL + MERGE_NOISE * noise_angle) * h
-        labels1, merged_primitives = merge_by_primitives(W, F, labels1, tol, topo=topo)
+        # capped by the distance tolerance: the dihedral estimate explodes on slivers
+        tol = min(tol, max(MERGE_TOL * h, vertex_tolerance(V, F)))
+        labels1, _ = merge_by_primitives(W, F, labels1, tol, topo=topo)
         timings["merge"] = time.perf_counter() - t
-    vlab1 = hl1.vertex_labels
-    surfaces = None
-    if refine:
-        t = time.perf_counter()
-        ref = refine_segmentation(V, F, labels1, vertex_tolerance(V, F), normals_from=W,
-                                  progress=progress)
-        labels1, k1 = ref.labels, len(ref.surfaces)
-        vlab1 = np.zeros(n, dtype=np.int64)
-        vlab1[F.ravel()] = np.repeat(labels1, 3)
-        surfaces = ref.surfaces
-        timings["surfaces"] = time.perf_counter() - t
-    labels, vertex_labels, segment_areas, order = final_numbering(
-        F, labels1, vlab1, face_areas(V, F), k1
+    labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
+        V, F, W, N, h, labels1, hl1.vertex_labels, k1, refine, fit_surfaces, progress, timings
     )
-    if surfaces is not None:
-        surfaces = [surfaces[g] for g in order]
-    elif fit_surfaces:  # one surface per segment, the labels as they are
-        t = time.perf_counter()
-        surfaces = fit_segments(V, F, labels, vertex_tolerance(V, F), normals_from=W)
-        timings["surfaces"] = time.perf_counter() - t
-
-    t = time.perf_counter()
-    diag = float(np.linalg.norm(W.max(axis=0) - W.min(axis=0)))
-    types, rms = [], []
-    for s in range(len(order)):
-        fs = np.flatnonzero(labels == s)
-        name, r = primitive_type(W[np.unique(F[fs])], N[fs], h, diag)
-        types.append(name)
-        rms.append(r)
-    timings["primitives"] = time.perf_counter() - t
 
     return RobustSegmentation(
         labels=labels,
@@ -754,3 +767,282 @@ def segment_robust(
         vertex_class=cls,
         denoised_V=W,
     )
+
+
+def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings):
+    """The common end of :func:`segment_robust`: refinement or one fit per segment, the final
+    numbering, the old primitive types."""
+    n = V.shape[0]
+    surfaces = None
+    if refine:
+        t = time.perf_counter()
+        ref = refine_segmentation(V, F, labels1, vertex_tolerance(V, F), normals_from=W,
+                                  progress=progress)
+        labels1, k1 = ref.labels, len(ref.surfaces)
+        vlab1 = np.zeros(n, dtype=np.int64)
+        vlab1[F.ravel()] = np.repeat(labels1, 3)
+        surfaces = ref.surfaces
+        timings["surfaces"] = time.perf_counter() - t
+    labels, vertex_labels, segment_areas, order = final_numbering(
+        F, labels1, vlab1, face_areas(V, F), k1
+    )
+    if surfaces is not None:
+        surfaces = [surfaces[g] for g in order]
+    elif fit_surfaces:  # one surface per segment, the labels as they are
+        t = time.perf_counter()
+        surfaces = fit_segments(V, F, labels, vertex_tolerance(V, F), normals_from=W)
+        timings["surfaces"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    diag = float(np.linalg.norm(W.max(axis=0) - W.min(axis=0)))
+    types, rms = [], []
+    for s in range(len(order)):
+        fs = np.flatnonzero(labels == s)
+        name, r = primitive_type(W[np.unique(F[fs])], N[fs], h, diag)
+        types.append(name)
+        rms.append(r)
+    timings["primitives"] = time.perf_counter() - t
+    return labels, vertex_labels, segment_areas, order, surfaces, types, np.asarray(rms)
+
+
+def starved_share(F: np.ndarray, seed: np.ndarray, area: np.ndarray) -> float:
+    """Area share of the faces none of whose vertices can be a seed.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    seed : (n,) bool
+        Vertices on no crease.
+    area : (m,) float64
+        Face areas.
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``; 0 for an empty mesh.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> starved_share(F, np.array([False, False, False, True]), np.array([1.0, 3.0]))
+    0.25
+    """
+    starved = ~seed[F].any(axis=1)
+    total = float(area.sum())
+    return float(area[starved].sum() / total) if total > 0 else 0.0
+
+
+def _off_crease(W: np.ndarray, F: np.ndarray, theta: float) -> np.ndarray:
+    topo = edge_topology(F)
+    sharp = _dihedral(W, F, topo) > theta
+    seed = np.zeros(W.shape[0], dtype=bool)
+    seed[F.ravel()] = True
+    seed[topo.E[sharp].ravel()] = False
+    return seed
+
+
+def subdivision_levels(
+    W: np.ndarray,
+    F: np.ndarray,
+    theta: float = ROBUST_THETA,
+    max_levels: int = MAX_SUBDIVIDE,
+    max_faces: int = MAX_SUBDIVIDED_FACES,
+) -> int:
+    """Levels of midpoint subdivision a mesh needs to have seeds on most of its area.
+
+    The paper's seeds are vertices no crease touches. A coarse CAD export puts every vertex on
+    a face's outline (a plane fanned from its rim, a cylinder of long strips from cap to cap),
+    so it has none and comes out as one segment. Midpoint subdivision adds vertices inside the
+    faces' edges without moving the surface: the fewest levels after which the faces with no
+    seed vertex hold at most :data:`STARVED_SHARE` of the area (:func:`starved_share`).
+
+    Parameters
+    ----------
+    W : (n, 3) float64
+        The (denoised) vertices.
+    F : (m, 3) int64
+    theta : float
+        Crease threshold (radians), as in :func:`segment_robust`.
+    max_levels : int
+        At most this many levels.
+    max_faces : int
+        And no more faces than this after them.
+
+    Returns
+    -------
+    int
+        0 on a mesh with seeds enough.
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V = np.array([[x, y, z] for x in (0., 1) for y in (0., 1) for z in (0., 1)])
+    >>> F = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4],
+    ...               [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]])
+    >>> subdivision_levels(V, F)  # one level leaves a quarter of every triangle seedless
+    2
+    >>> subdivision_levels(*igl.upsample(V, F, 3))
+    0
+    """
+    area = face_areas(W, F)
+    for levels in range(max_levels + 1):
+        if levels and F.shape[0] * 4 ** levels > max_faces:
+            return levels - 1
+        Wl, Fl = (W, F) if levels == 0 else igl.upsample(W, F, levels)
+        share = starved_share(Fl, _off_crease(Wl, Fl, theta), np.repeat(area, 4 ** levels))
+        if share <= STARVED_SHARE:
+            return levels
+    return max_levels
+
+
+def _majority(labels_fine: np.ndarray, m: int, children: int) -> np.ndarray:
+    """(m,) label most of each face's ``children`` consecutive children carry (``igl.upsample``
+    numbers the children of face ``f`` as ``f * children + 0..children-1``)."""
+    C = labels_fine.reshape(m, children)
+    k = int(labels_fine.max()) + 1
+    counts = np.zeros((m, k), dtype=np.int64)
+    np.add.at(counts, (np.repeat(np.arange(m), children), C.ravel()), 1)
+    return counts.argmax(axis=1).astype(np.int64)
+
+
+def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit_surfaces, refine):
+    """:func:`segment_robust` on the midpoint subdivision of the denoised surface ``W``, the
+    labels brought back to ``mesh``'s faces (majority of the children, then face-connected)."""
+    V, F = mesh.V, mesh.F
+    n, m = V.shape[0], F.shape[0]
+    t = time.perf_counter()
+    Wf, Ff = igl.upsample(W, F, levels)
+    Wf = np.ascontiguousarray(Wf, dtype=np.float64)
+    Ff = np.ascontiguousarray(Ff, dtype=np.int64)
+    nf = Wf.shape[0]
+    fine_mesh = CleanMesh(V=Wf, F=Ff, vertex_map=np.arange(nf), input_vertex=np.arange(nf),
+                          name=f"{mesh.name} (subdivided x{levels})")
+    timings["subdivide"] = time.perf_counter() - t
+    log.info("robust: %d faces too coarse for seeds: %d levels of subdivision, %d faces", m,
+             levels, Ff.shape[0])
+    fine = segment_robust(fine_mesh, denoise=False, merge=False, fit_surfaces=False,
+                          refine=False, subdivide=0, **kw)
+    for key, value in fine.timings.items():
+        timings[key] = timings.get(key, 0.0) + value
+    children = 4 ** levels
+    topo = edge_topology(F)
+    h = _mean_edge_length(W, topo.E)
+    fine_topo = edge_topology(Ff)
+    fine_sharp = _dihedral(Wf, Ff, fine_topo) > kw["theta"]
+    seg_of_group = np.full(len(fine.kept_groups) + 1, -1, dtype=np.int64)
+    seg_of_group[fine.segment_group] = np.arange(len(fine.segment_group))
+    vseg = np.where(fine.final_group >= 0, seg_of_group[fine.final_group], -1)
+    fine_labels = snap_to_creases(Ff, fine.labels, vseg, fine_sharp, fine_topo)
+    if merge:
+        # on the subdivided surface, whose points inside a fan cap are off the cylinder its rim
+        # lies on; the tolerance is the fits' (the dihedral noise estimate of the dense path
+        # explodes on slivers: a median of 60 deg at noise 0.1 h)
+        t = time.perf_counter()
+        tol = max(MERGE_TOL * h, vertex_tolerance(V, F))
+        fine_labels, _ = merge_by_primitives(Wf, Ff, fine_labels, tol)
+        timings["merge"] = time.perf_counter() - t
+    labels1 = _majority(fine_labels, m, children)
+    labels1, _ = make_face_connected(V, F, labels1, np.full(n, -1, dtype=np.int64),
+                                     face_areas(V, F), topo)
+    k1 = fine.num_segments
+    N = face_normals(W, F)
+    labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
+        V, F, W, N, h, labels1, fine.vertex_labels[:n], k1, refine, fit_surfaces,
+        kw["progress"], timings,
+    )
+    return RobustSegmentation(
+        labels=labels,
+        vertex_labels=vertex_labels,
+        segment_areas=segment_areas,
+        seed_mask=fine.seed_mask[:n],
+        sharp_edges=topo.E[sharp],
+        seed_group=fine.seed_group[:n],
+        initial_labels=_majority(fine.initial_labels, m, children),
+        initial_areas=fine.initial_areas,
+        final_group=fine.final_group[:n],
+        segment_group=order if refine else fine.segment_group[order],
+        kept_groups=fine.kept_groups,
+        components=fine.components,
+        seedless_components=fine.seedless_components,
+        merged_islands=fine.merged_islands,
+        merged_islands_initial=fine.merged_islands_initial,
+        heat_sum_error=fine.heat_sum_error,
+        theta=fine.theta,
+        eps=fine.eps,
+        timings=timings,
+        group_component=fine.group_component,
+        mode="robust",
+        primitive_types=types,
+        surfaces=surfaces,
+        primitive_rms=rms,
+        vertex_class=fine.vertex_class[:n],
+        denoised_V=W,
+        subdivided=levels,
+    )
+
+
+def snap_to_creases(
+    F: np.ndarray, labels: np.ndarray, vertex_segment: np.ndarray, sharp: np.ndarray, topo=None
+) -> np.ndarray:
+    """Keep every segment on its own side of the creases.
+
+    The heat fields cross creases: where seeds lie far from a crease on one side (a coarse
+    mesh's cylinder, whose only seeds are halfway between its rims) and close to it on the
+    other (its caps), the hotter side wins faces across the crease. Here the *regions* are the
+    pieces of the surface the creases cut out (faces joined through non-crease edges); a face
+    whose segment has no seed in its region takes, ring by ring, the segment of a neighbour in
+    its region that has. A region without any seed keeps its labels.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segments ``0..k-1``.
+    vertex_segment : (n,) int64
+        The segment whose seed each vertex is, ``-1`` for no seed.
+    sharp : (ne,) bool
+        Crease edges, indexed like ``edge_topology(F).E``.
+    topo : EdgeTopology, optional
+
+    Returns
+    -------
+    (m,) int64
+        New labels (same ids; every face is reached, as its region is connected).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4]])
+    >>> topo = edge_topology(F)
+    >>> sharp = np.zeros(len(topo.E), dtype=bool)
+    >>> sharp[(topo.E == [1, 2]).all(axis=1)] = True   # a crease between faces 0 and 1
+    >>> snap_to_creases(F, np.array([0, 0, 1]), np.array([0, -1, -1, 1, 1]), sharp, topo)
+    array([0, 1, 1])
+    """
+    topo = edge_topology(F) if topo is None else topo
+    m = F.shape[0]
+    labels = labels.copy()
+    smooth = topo.interior & ~sharp
+    f0, f1 = topo.EF[smooth, 0], topo.EF[smooth, 1]
+    A = sp.csr_matrix((np.ones(len(f0)), (f0, f1)), shape=(m, m))
+    A = (A + A.T).tocsr()
+    nreg, region = connected_components(A, directed=False)
+    k = int(labels.max()) + 1 if m else 0
+    seeded = np.zeros((nreg, max(k, 1)), dtype=bool)
+    corner_seg = vertex_segment[F]  # (m, 3)
+    has = corner_seg >= 0
+    seeded[np.repeat(region, 3).reshape(m, 3)[has], corner_seg[has]] = True
+    ok = seeded[region, labels] | ~seeded[region].any(axis=1)
+    while not ok.all():
+        # each wrong face takes the most common segment of its right neighbours in its region
+        good = sp.csr_matrix((np.ones(int(ok.sum())), (np.flatnonzero(ok), labels[ok])),
+                             shape=(m, max(k, 1)))
+        votes = (A @ good).tocsr()[~ok]
+        reached = np.asarray(votes.sum(axis=1)).ravel() > 0
+        if not reached.any():
+            break
+        wrong = np.flatnonzero(~ok)[reached]
+        labels[wrong] = np.asarray(votes[reached].argmax(axis=1)).ravel()
+        ok[wrong] = True
+    return labels

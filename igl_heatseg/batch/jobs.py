@@ -120,7 +120,7 @@ def segment_file(
     solver: str = "fast",
     repair: bool = False,
     progress=None,
-    refine: bool = False,
+    refine: bool | None = None,
 ) -> JobOutput:
     """Load, segment and write one mesh: what ``igl-heatseg segment MESH -o OUT`` does.
 

@@ -58,10 +58,11 @@ def register(subparsers) -> None:
     add_solver_argument(p)
     p.add_argument(
         "--refine",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help="robust mode: refine the segments by their surface fits (split what no surface "
-        "explains, merge what one explains, move boundaries onto the surfaces); off by default: "
-        "it fixes coarse CAD exports but passed fewer of the generated tuning parts",
+        "explains, merge what one explains, move boundaries onto the surfaces); default: on "
+        "exact CAD tessellations, off on scans and noisy meshes",
     )
     add_repair_argument(p)
     add_progress_argument(p)

@@ -21,7 +21,7 @@ def segment_with_mode(
     progress: Progress | None = None,
     solver: str = "fast",
     keep_solvers: bool = False,
-    refine: bool = False,
+    refine: bool | None = None,
 ) -> Segmentation:
     """Segment in the paper's mode or in robust mode, with each mode's own defaults.
 
@@ -38,9 +38,10 @@ def segment_with_mode(
         Heat solver (both modes).
     keep_solvers : bool
         Paper mode: keep the factorizations for :meth:`Segmentation.temperature`.
-    refine : bool
-        Robust mode: refine the segments by their surface fits
-        (:func:`~igl_heatseg.segmentation.robust.segment_robust`); ignored in paper mode.
+    refine : bool, optional
+        Robust mode: refine the segments by their surface fits; default on exact CAD
+        tessellations only (:func:`~igl_heatseg.segmentation.robust.segment_robust`); ignored
+        in paper mode.
 
     Returns
     -------
@@ -69,7 +70,7 @@ def segment(
     mode: str = "paper",
     solver: str = "fast",
     progress: Progress | None = None,
-    refine: bool = False,
+    refine: bool | None = None,
 ) -> Segmentation:
     """Segment a mesh: the package's main entry point.
 
@@ -84,8 +85,9 @@ def segment(
     mode : {"paper", "robust"}
     solver : {"fast", "exact"}
     progress : callable(stage, fraction), optional
-    refine : bool
-        Robust mode: refine the segments by their surface fits.
+    refine : bool, optional
+        Robust mode: refine the segments by their surface fits (default: on exact CAD
+        tessellations only).
 
     Returns
     -------

@@ -52,6 +52,9 @@ log = logging.getLogger(__name__)
 #: is below this fraction of the distance to its own.
 MOVE_RATIO = 0.5
 
+#: ... and only faces farther than this many tolerances from their own segment's surface.
+MOVE_FLOOR = 0.01
+
 #: Lloyd passes: refit, then move the faces on the current boundaries.
 MOVE_PASSES = 4
 
@@ -170,9 +173,10 @@ class SurfaceSegmentation:
     timings: dict = field(default_factory=dict)
 
 
-def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
+def _fit(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surface:
     """Fit ``faces`` (positions from ``V``; normals from ``W`` when given, face normals ``FN``
-    indexed by face id)."""
+    indexed by face id); ``trim``: try :func:`_trimmed_fit` when the fit fails on a few
+    faces."""
     if len(faces) < MIN_FIT_FACES:
         return Surface("freeform", {"centroid": V[F[faces]].reshape(-1, 3).mean(axis=0)},
                        area=float(face_areas(V, F[faces]).sum()))
@@ -181,7 +185,7 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
     s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
-    if not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
+    if trim and not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
         TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
     ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
         s = _trimmed_fit(V, F, faces, tol, allowed, W, s, (P, N, w)) or s
@@ -189,13 +193,18 @@ def _fit(V, F, faces, tol, kinds=None, W=None, FN=None) -> Surface:
         # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
         # three (radius, height) profile points, which a torus always passes through. The face
         # normals must agree with the surface's too.
-        A = face_areas(V, F[faces])
         FN = face_normals(V if W is None else W, F) if FN is None else FN
-        off = _normal_angle(V, F, FN, faces, s) > GROW_ANGLE
-        if A[off].sum() > NORMAL_OFF_SHARE * A.sum():
+        if not _normals_agree(V, F, FN, faces, s):
             return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
-                           max_dev=s.max_dev, area=float(A.sum()))
+                           max_dev=s.max_dev, area=float(face_areas(V, F[faces]).sum()))
     return s
+
+
+def _normals_agree(V, F, FN, faces, s: Surface) -> bool:
+    """At most NORMAL_OFF_SHARE of the faces' area has normals over GROW_ANGLE off ``s``'s."""
+    A = face_areas(V, F[faces])
+    off = _normal_angle(V, F, FN, faces, s) > GROW_ANGLE
+    return bool(A[off].sum() <= NORMAL_OFF_SHARE * A.sum())
 
 
 def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface | None:
@@ -422,16 +431,26 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
         if key in rejected:
             return
         da, db = _rms_to(V, F, faces_of[b], fits[a]), _rms_to(V, F, faces_of[a], fits[b])
-        if da <= tol and _explains(fits[a], tol):
+        # (the normals too: a fan cap's vertices all lie on its cylinder's rim)
+        if da <= tol and _explains(fits[a], tol) and _normals_agree(V, F, FNs, faces_of[b],
+                                                                    fits[a]):
             u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
-        elif db <= tol and _explains(fits[b], tol):
+        elif db <= tol and _explains(fits[b], tol) and _normals_agree(V, F, FNs, faces_of[a],
+                                                                      fits[b]):
             u = fits[b]
         elif min(da, db) <= PRECHECK_TOL * tol or smooth(a, b) or (
             max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
             and not _explains(fits[a], tol)
             and not _explains(fits[b], tol)
         ):
-            u = _fit(V, F, np.concatenate([faces_of[a], faces_of[b]]), tol, W=W, FN=FN)
+            # no trimming: a union that needs its stray faces cut off is not one surface
+            u = _fit(V, F, np.concatenate([faces_of[a], faces_of[b]]), tol, W=W, FN=FN,
+                     trim=False)
+            # each part on its own: a small cap whose rim lies on a big cylinder is under the
+            # union's share of faces off the surface's normals
+            if u.is_analytic and not (_normals_agree(V, F, FNs, faces_of[a], u)
+                                      and _normals_agree(V, F, FNs, faces_of[b], u)):
+                u = Surface("freeform", {"centroid": np.zeros(3)}, area=u.area)
         else:
             rejected.add(key)
             return
@@ -474,6 +493,7 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) 
     """Lloyd passes: faces on boundaries go to the neighbouring surface clearly nearer to them;
     the segments that changed are refitted before the next pass."""
     moved = 0
+    FN = face_normals(V if W is None else W, F) if FN is None else FN
     for _ in range(MOVE_PASSES):
         fa, fb = segment_adjacency(F, labels)
         if len(fa) == 0:
@@ -492,6 +512,10 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) 
             sel = cand_face[cand_label == k]
             d = _corner_rms(V, F, sel, fits[k])
             ok = (d < MOVE_RATIO * own[sel]) & (d <= GROW_TOL * tol) & (d < best[sel])
+            # a face on its own surface stays (rounding decides between two exact fits), and
+            # the normals must agree (a fan cap's corners all lie on its cylinder's rim)
+            ok &= own[sel] > MOVE_FLOOR * tol
+            ok &= _normal_angle(V, F, FN, sel, fits[k]) <= GROW_ANGLE
             new[sel[ok]] = k
             best[sel[ok]] = d[ok]
         counts = np.bincount(new, minlength=labels.max() + 1)
@@ -531,9 +555,10 @@ def _real_split(V, F, parts, part_fits, tol, ratio=None) -> bool:
     return bool(good >= SPLIT_GOOD_SHARE * A.sum())
 
 
-def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT) -> int:
+def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
     """A face with two or three neighbours of another segment, on whose surface it lies
-    (within GROW_TOL x tol), joins it: the single-face teeth a noisy boundary leaves."""
+    (corners within GROW_TOL x tol, normal within GROW_ANGLE), joins it: the single-face teeth
+    a noisy boundary leaves."""
     changed = 0
     for _ in range(MOVE_PASSES):
         nb = TT
@@ -549,7 +574,9 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT) -> int:
             if counts.max() < 2:
                 continue
             k = int(ls[np.argmax(counts)])
-            if _corner_rms(V, F, np.array([f]), fits[k])[0] <= GROW_TOL * tol:
+            one = np.array([f])
+            if (_corner_rms(V, F, one, fits[k])[0] <= GROW_TOL * tol
+                    and _normal_angle(V, F, FN, one, fits[k])[0] <= GROW_ANGLE):
                 new[f] = k
                 moved += 1
         if moved == 0:
@@ -559,9 +586,9 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT) -> int:
     return changed
 
 
-def _absorb_shards(V, F, labels, fits: dict, tol: float, TT) -> np.ndarray:
+def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
     """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
-    RMS within GROW_TOL x tol) join it; unexplained ones of fewer than MIN_REGION_FACES faces
+    RMS within GROW_TOL x tol, normals agreeing) join it; unexplained ones of fewer than MIN_REGION_FACES faces
     join the nearest neighbour whatever the distance. A true small face (a chamfer two
     triangles wide) is off its neighbours' surfaces and explained by its own: it stays."""
     labels = labels.copy()
@@ -575,7 +602,8 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT) -> np.ndarray:
         d = [float(np.sqrt(np.mean(_corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
         j = int(np.argmin(d))
         tiny = len(faces) < MIN_REGION_FACES and not _explains(fits[k], tol)
-        if d[j] <= GROW_TOL * tol or tiny:
+        on = d[j] <= GROW_TOL * tol and _normals_agree(V, F, FN, faces, fits[nb[j]])
+        if on or tiny:
             labels[faces] = nb[j]
     return labels
 
@@ -692,7 +720,7 @@ def refine_segmentation(
         t = time.perf_counter()
         progress("boundaries", 0.0)
         mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN)
-        mv_round += _smooth_teeth(V, F, labels, fits, tol, TT)
+        mv_round += _smooth_teeth(V, F, labels, fits, tol, TT, FN)
         pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
         if len(np.unique(pieces)) != len(fits):
             labels = pieces
@@ -704,7 +732,7 @@ def refine_segmentation(
         if m_round == 0 and mv_round == 0:
             break
     t = time.perf_counter()
-    labels = _absorb_shards(V, F, labels, fits, tol, TT)
+    labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
     timings["shards"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -228,6 +228,7 @@ def write_segmentation(
         report["primitive_types"] = list(types)
         report["primitive_rms"] = seg.primitive_rms
         report["subdivided"] = int(getattr(seg, "subdivided", 0))
+        report["refinement"] = str(getattr(seg, "refinement", "off"))
     surfaces = getattr(seg, "surfaces", None)
     if surfaces is not None:
         report["surfaces"] = [dict(segment=i, **s.to_dict()) for i, s in enumerate(surfaces)]

@@ -625,6 +625,7 @@ def refine_segmentation(
     tol: float | None = None,
     *,
     split: bool = True,
+    merge: bool = True,
     normals_from: np.ndarray | None = None,
     progress=None,
 ) -> SurfaceSegmentation:
@@ -643,6 +644,8 @@ def refine_segmentation(
         vertices, which lie on the true surface whatever the facet size).
     split : bool
         Split segments that no surface explains (step 2).
+    merge : bool
+        Merge adjacent segments that one surface explains (step 3).
     normals_from : (n, 3) float64, optional
         Positions the normals are taken from (a denoised copy of ``V``: noisy face normals
         mislead seeds and growth); distances are always measured on ``V``.
@@ -715,7 +718,7 @@ def refine_segmentation(
     for _ in range(ROUNDS):  # moves can make segments adjacent that a merge then joins
         t = time.perf_counter()
         progress("merge", 0.0)
-        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN)
+        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN) if merge else 0
         timings["merge"] += time.perf_counter() - t
         t = time.perf_counter()
         progress("boundaries", 0.0)

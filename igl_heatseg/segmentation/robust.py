@@ -70,7 +70,23 @@ from .paper import (
     heat_round,
     make_face_connected,
 )
+from .coarse import (
+    MAX_SUBDIVIDE,
+    STARVED_SHARE,
+    children_majority,
+    snap_to_creases,
+    starved_share,
+    subdivision_levels,
+)
 from .params import ROBUST_EPS, ROBUST_THETA, check_segment_params, check_solver, eps_keep
+from .primitive_merge import (
+    PRIMITIVE_TOL,
+    fit_cylinder,
+    fit_plane,
+    fit_sphere,
+    merge_by_primitives,
+    primitive_type,
+)
 from .seeds import dihedral_deviation
 
 __all__ = [
@@ -95,6 +111,7 @@ __all__ = [
     "ANISOTROPY",
     "AXIS_ANGLE",
     "PRIMITIVE_TOL",
+    "STARVED_SHARE",
 ]
 
 log = logging.getLogger(__name__)
@@ -125,10 +142,6 @@ CURVATURE_RING: int = 2
 #: Rings around creases that hold no seeds.
 CREASE_DILATION: int = 0
 
-#: Primitive type: a simpler fit is chosen when its RMS distance is within this many mean edge
-#: lengths of the best fit's.
-PRIMITIVE_TOL: float = 0.05
-
 #: Adjacent segments merge when one primitive fits their union within this many mean edge
 #: lengths (RMS) ...
 MERGE_TOL: float = 0.1
@@ -136,26 +149,6 @@ MERGE_TOL: float = 0.1
 #: ... plus this many times the input's median dihedral deviation (radians; a noise estimate:
 #: normal noise of sigma = 0.1 mean edge lengths gives a median of about 0.17) ...
 MERGE_NOISE: float = 1.2
-
-#: ... or within this factor of the worse of the two pieces' own fits (noise level).
-MERGE_RATIO: float = 1.3
-
-#: Additive slack of the relative test, as a fraction of the absolute tolerance.
-MERGE_SLACK: float = 0.1
-
-#: A mesh is too coarse for vertex seeds when faces with no vertex off the creases hold more
-#: than this share of the area (a CAD export that puts every vertex on a face's outline:
-#: measured ~1 on coarse exports, below 0.2 on meshes of 2,000 faces and more).
-STARVED_SHARE: float = 0.1
-
-#: At most this many levels of midpoint subdivision ...
-MAX_SUBDIVIDE: int = 2
-
-#: ... and no more faces than this after it.
-MAX_SUBDIVIDED_FACES: int = 400_000
-
-#: Fewer points than this cannot be typed (``"Other"``).
-_MIN_FIT_POINTS = 8
 
 
 @dataclass
@@ -283,231 +276,6 @@ def curvature_classes(
     bad = ~np.isfinite(big)
     cls[bad] = 0
     return cls.astype(np.int64), axis
-
-
-# --------------------------------------------------------------------------------------------
-# Primitive fits
-# --------------------------------------------------------------------------------------------
-
-
-def fit_plane(P: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    """Least-squares plane.
-
-    Parameters
-    ----------
-    P : (p, 3) float64
-        Points.
-
-    Returns
-    -------
-    rms : float
-        RMS distance to the plane.
-    center : (3,) float64
-    normal : (3,) float64
-    """
-    c = P.mean(axis=0)
-    _, s, Vt = np.linalg.svd(P - c, full_matrices=False)
-    return float(s[-1] / math.sqrt(len(P))), c, Vt[-1]
-
-
-def fit_sphere(P: np.ndarray) -> tuple[float, np.ndarray, float]:
-    """Algebraic sphere fit ``|x|^2 = 2 c . x + (r^2 - |c|^2)``.
-
-    Returns
-    -------
-    rms : float
-        RMS of ``|x - c| - r``.
-    center : (3,) float64
-    radius : float
-    """
-    A = np.c_[2 * P, np.ones(len(P))]
-    b = (P * P).sum(axis=1)
-    x, *_ = np.linalg.lstsq(A, b, rcond=None)
-    c = x[:3]
-    r = math.sqrt(max(x[3] + c @ c, 0.0))
-    return float(np.sqrt(((np.linalg.norm(P - c, axis=1) - r) ** 2).mean())), c, r
-
-
-def fit_cylinder(P: np.ndarray, N: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, float]:
-    """Cylinder fit: axis from the normals, circle fit in the plane across it.
-
-    The normals of a cylinder are perpendicular to its axis, so the axis is the eigenvector of
-    ``sum n n^T`` with the smallest eigenvalue; the points projected across the axis are fitted
-    with an algebraic circle.
-
-    Parameters
-    ----------
-    P : (p, 3) float64
-        Points.
-    N : (q, 3) float64
-        Unit normals sampled on the same surface.
-
-    Returns
-    -------
-    rms : float
-        RMS of distance-to-axis minus radius.
-    point : (3,) float64
-        A point on the axis.
-    axis : (3,) float64
-    radius : float
-    """
-    _, vecs = np.linalg.eigh(N.T @ N)
-    a = vecs[:, 0]
-    u = vecs[:, 1]
-    v = vecs[:, 2]
-    Q = np.c_[P @ u, P @ v]
-    A = np.c_[2 * Q, np.ones(len(Q))]
-    b = (Q * Q).sum(axis=1)
-    x, *_ = np.linalg.lstsq(A, b, rcond=None)
-    c2 = x[:2]
-    r = math.sqrt(max(x[2] + c2 @ c2, 0.0))
-    rms = float(np.sqrt(((np.linalg.norm(Q - c2, axis=1) - r) ** 2).mean()))
-    return rms, c2[0] * u + c2[1] * v, a, r
-
-
-def primitive_type(P: np.ndarray, N: np.ndarray, h: float, diag: float) -> tuple[str, float]:
-    """The simplest of plane / cylinder / sphere that fits as well as the best (within tol).
-
-    Parameters
-    ----------
-    P : (p, 3) float64
-        The segment's vertices.
-    N : (q, 3) float64
-        The segment's unit face normals.
-    h : float
-        Mean edge length (tolerance unit, :data:`PRIMITIVE_TOL`).
-    diag : float
-        Part size; fits with a radius above ``10 * diag`` count as planes.
-
-    Returns
-    -------
-    type : str
-        ``"Plane"``, ``"Cylinder"``, ``"Sphere"`` or ``"Other"``.
-    rms : float
-        RMS distance of the chosen fit (``nan`` for ``"Other"`` with too few points).
-    """
-    if len(P) < _MIN_FIT_POINTS:
-        return "Other", math.nan
-    fits = [("Plane", fit_plane(P)[0])]
-    rc = fit_cylinder(P, N)
-    if rc[3] < 10 * diag:
-        fits.append(("Cylinder", rc[0]))
-    rs = fit_sphere(P)
-    if rs[2] < 10 * diag:
-        fits.append(("Sphere", rs[0]))
-    best = min(r for _, r in fits)
-    tol = PRIMITIVE_TOL * h
-    for name, r in fits:  # simplest first
-        if r <= best + tol and r <= 2 * tol + best:
-            if r > 4 * tol:
-                return "Other", float(best)
-            return name, float(r)
-    return "Other", float(best)
-
-
-def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float) -> np.ndarray | None:
-    """Point residuals of the best of the plane, cylinder and sphere fits (None if too few)."""
-    if len(P) < _MIN_FIT_POINTS:
-        return None
-    _, c, nrm = fit_plane(P)
-    cands = [(P - c) @ nrm]
-    rc = fit_cylinder(P, N)
-    if rc[3] < 10 * diag:
-        X = P - rc[1]
-        radial = X - np.outer(X @ rc[2], rc[2])
-        cands.append(np.linalg.norm(radial, axis=1) - rc[3])
-    rs = fit_sphere(P)
-    if rs[2] < 10 * diag:
-        cands.append(np.linalg.norm(P - rs[1], axis=1) - rs[2])
-    return min(cands, key=lambda r: float((r * r).mean()))
-
-
-def merge_by_primitives(
-    V: np.ndarray,
-    F: np.ndarray,
-    labels: np.ndarray,
-    tol: float,
-    ratio: float = MERGE_RATIO,
-    topo=None,
-) -> tuple[np.ndarray, int]:
-    """Greedily merge adjacent segments whose union one plane, cylinder or sphere fits.
-
-    The union's best fit is judged on each piece separately (so a big plane cannot swallow a
-    small curved piece whose points it misses, which a single RMS over the union allows): the
-    worse of the two pieces' RMS distances to the union's fit must be at most ``tol`` and at
-    most ``ratio * max(rms_a, rms_b) + MERGE_SLACK * tol`` (the pieces' own fits: the noise
-    level).  The pair with the smallest such RMS goes first; fits are recomputed after every
-    merge.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    labels : (m,) int64
-        Face labels ``0..k-1``.
-    tol : float
-        Absolute RMS tolerance (model units).
-    ratio : float
-        Relative tolerance against the two pieces' own fits (noise level).
-    topo : EdgeTopology, optional
-
-    Returns
-    -------
-    labels : (m,) int64
-        Merged labels (ids of the surviving segments, not renumbered).
-    merged : int
-        Number of merges.
-    """
-    topo = edge_topology(F) if topo is None else topo
-    N, _ = (face_normals(V, F), face_areas(V, F))
-    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
-    labels = labels.copy()
-    faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
-
-    def fit(fs):
-        res = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
-        return math.inf if res is None else float(np.sqrt((res * res).mean()))
-
-    def union_fit(fa, fb):
-        """RMS of the union's best fit over the points of each piece (the worse one)."""
-        va, vb = np.unique(F[fa]), np.unique(F[fb])
-        vs = np.union1d(va, vb)
-        res = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
-        if res is None:
-            return math.inf
-        ra, rb = res[np.searchsorted(vs, va)], res[np.searchsorted(vs, vb)]
-        return float(max(np.sqrt((ra * ra).mean()), np.sqrt((rb * rb).mean())))
-
-    rms = {s: fit(fs) for s, fs in faces.items()}
-    inner = topo.interior
-    ef = topo.EF[inner]
-
-    def neighbours():
-        la, lb = labels[ef[:, 0]], labels[ef[:, 1]]
-        d = la != lb
-        return {(int(min(a, b)), int(max(a, b))) for a, b in zip(la[d], lb[d], strict=True)}
-
-    slack = MERGE_SLACK * tol
-    cache: dict[tuple[int, int], float] = {}
-    merged = 0
-    while True:
-        best, pair = math.inf, None
-        for a, b in neighbours():
-            if (a, b) not in cache:
-                cache[(a, b)] = union_fit(faces[a], faces[b])
-            r = cache[(a, b)]
-            ok = r <= tol and (ratio <= 0 or r <= ratio * max(rms[a], rms[b]) + slack)
-            if ok and r < best:
-                best, pair = r, (a, b)
-        if pair is None:
-            return labels, merged
-        a, b = pair
-        faces[a] = np.concatenate([faces[a], faces.pop(b)])
-        labels[faces[a]] = a
-        rms[a] = fit(faces[a])
-        rms.pop(b)
-        cache = {k: v for k, v in cache.items() if a not in k and b not in k}
-        merged += 1
 
 
 # --------------------------------------------------------------------------------------------
@@ -821,107 +589,6 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
     return labels, vertex_labels, segment_areas, order, surfaces, types, np.asarray(rms)
 
 
-def starved_share(F: np.ndarray, seed: np.ndarray, area: np.ndarray) -> float:
-    """Area share of the faces none of whose vertices can be a seed.
-
-    Parameters
-    ----------
-    F : (m, 3) int64
-    seed : (n,) bool
-        Vertices on no crease.
-    area : (m,) float64
-        Face areas.
-
-    Returns
-    -------
-    float
-        In ``[0, 1]``; 0 for an empty mesh.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
-    >>> starved_share(F, np.array([False, False, False, True]), np.array([1.0, 3.0]))
-    0.25
-    """
-    starved = ~seed[F].any(axis=1)
-    total = float(area.sum())
-    return float(area[starved].sum() / total) if total > 0 else 0.0
-
-
-def _off_crease(W: np.ndarray, F: np.ndarray, theta: float) -> np.ndarray:
-    topo = edge_topology(F)
-    sharp = _dihedral(W, F, topo) > theta
-    seed = np.zeros(W.shape[0], dtype=bool)
-    seed[F.ravel()] = True
-    seed[topo.E[sharp].ravel()] = False
-    return seed
-
-
-def subdivision_levels(
-    W: np.ndarray,
-    F: np.ndarray,
-    theta: float = ROBUST_THETA,
-    max_levels: int = MAX_SUBDIVIDE,
-    max_faces: int = MAX_SUBDIVIDED_FACES,
-) -> int:
-    """Levels of midpoint subdivision a mesh needs to have seeds on most of its area.
-
-    The paper's seeds are vertices no crease touches. A coarse CAD export puts every vertex on
-    a face's outline (a plane fanned from its rim, a cylinder of long strips from cap to cap),
-    so it has none and comes out as one segment. Midpoint subdivision adds vertices inside the
-    faces' edges without moving the surface: the fewest levels after which the faces with no
-    seed vertex hold at most :data:`STARVED_SHARE` of the area (:func:`starved_share`).
-
-    Parameters
-    ----------
-    W : (n, 3) float64
-        The (denoised) vertices.
-    F : (m, 3) int64
-    theta : float
-        Crease threshold (radians), as in :func:`segment_robust`.
-    max_levels : int
-        At most this many levels.
-    max_faces : int
-        And no more faces than this after them.
-
-    Returns
-    -------
-    int
-        0 on a mesh with seeds enough.
-
-    Examples
-    --------
-    >>> import igl, numpy as np
-    >>> V = np.array([[x, y, z] for x in (0., 1) for y in (0., 1) for z in (0., 1)])
-    >>> F = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4],
-    ...               [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]])
-    >>> subdivision_levels(V, F)  # one level leaves a quarter of every triangle seedless
-    2
-    >>> subdivision_levels(*igl.upsample(V, F, 3))
-    0
-    """
-    area = face_areas(W, F)
-    for levels in range(max_levels + 1):
-        if levels and F.shape[0] * 4 ** levels > max_faces:
-            return levels - 1
-        Wl, Fl = (W, F) if levels == 0 else igl.upsample(W, F, levels)
-        share = starved_share(Fl, _off_crease(Wl, Fl, theta), np.repeat(area, 4 ** levels))
-        if share <= STARVED_SHARE:
-            return levels
-    return max_levels
-
-
-def _majority(labels_fine: np.ndarray, m: int, children: int) -> np.ndarray:
-    """(m,) label most of each face's ``children`` consecutive children carry (``igl.upsample``
-    numbers the children of face ``f`` as ``f * children + 0..children-1``)."""
-    C = labels_fine.reshape(m, children)
-    k = int(labels_fine.max()) + 1
-    counts = np.zeros((m, k), dtype=np.int64)
-    np.add.at(counts, (np.repeat(np.arange(m), children), C.ravel()), 1)
-    return counts.argmax(axis=1).astype(np.int64)
-
-
 def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit_surfaces, refine):
     """:func:`segment_robust` on the midpoint subdivision of the denoised surface ``W``, the
     labels brought back to ``mesh``'s faces (majority of the children, then face-connected)."""
@@ -958,7 +625,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
         tol = max(MERGE_TOL * h, vertex_tolerance(V, F))
         fine_labels, _ = merge_by_primitives(Wf, Ff, fine_labels, tol)
         timings["merge"] = time.perf_counter() - t
-    labels1 = _majority(fine_labels, m, children)
+    labels1 = children_majority(fine_labels, m, children)
     labels1, _ = make_face_connected(V, F, labels1, np.full(n, -1, dtype=np.int64),
                                      face_areas(V, F), topo)
     k1 = fine.num_segments
@@ -974,7 +641,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
         seed_mask=fine.seed_mask[:n],
         sharp_edges=topo.E[sharp],
         seed_group=fine.seed_group[:n],
-        initial_labels=_majority(fine.initial_labels, m, children),
+        initial_labels=children_majority(fine.initial_labels, m, children),
         initial_areas=fine.initial_areas,
         final_group=fine.final_group[:n],
         segment_group=order if refine != "off" else fine.segment_group[order],
@@ -997,69 +664,3 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
         subdivided=levels,
         refinement=refine,
     )
-
-
-def snap_to_creases(
-    F: np.ndarray, labels: np.ndarray, vertex_segment: np.ndarray, sharp: np.ndarray, topo=None
-) -> np.ndarray:
-    """Keep every segment on its own side of the creases.
-
-    The heat fields cross creases: where seeds lie far from a crease on one side (a coarse
-    mesh's cylinder, whose only seeds are halfway between its rims) and close to it on the
-    other (its caps), the hotter side wins faces across the crease. Here the *regions* are the
-    pieces of the surface the creases cut out (faces joined through non-crease edges); a face
-    whose segment has no seed in its region takes, ring by ring, the segment of a neighbour in
-    its region that has. A region without any seed keeps its labels.
-
-    Parameters
-    ----------
-    F : (m, 3) int64
-    labels : (m,) int64
-        Segments ``0..k-1``.
-    vertex_segment : (n,) int64
-        The segment whose seed each vertex is, ``-1`` for no seed.
-    sharp : (ne,) bool
-        Crease edges, indexed like ``edge_topology(F).E``.
-    topo : EdgeTopology, optional
-
-    Returns
-    -------
-    (m,) int64
-        New labels (same ids; every face is reached, as its region is connected).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> F = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4]])
-    >>> topo = edge_topology(F)
-    >>> sharp = np.zeros(len(topo.E), dtype=bool)
-    >>> sharp[(topo.E == [1, 2]).all(axis=1)] = True   # a crease between faces 0 and 1
-    >>> snap_to_creases(F, np.array([0, 0, 1]), np.array([0, -1, -1, 1, 1]), sharp, topo)
-    array([0, 1, 1])
-    """
-    topo = edge_topology(F) if topo is None else topo
-    m = F.shape[0]
-    labels = labels.copy()
-    smooth = topo.interior & ~sharp
-    f0, f1 = topo.EF[smooth, 0], topo.EF[smooth, 1]
-    A = sp.csr_matrix((np.ones(len(f0)), (f0, f1)), shape=(m, m))
-    A = (A + A.T).tocsr()
-    nreg, region = connected_components(A, directed=False)
-    k = int(labels.max()) + 1 if m else 0
-    seeded = np.zeros((nreg, max(k, 1)), dtype=bool)
-    corner_seg = vertex_segment[F]  # (m, 3)
-    has = corner_seg >= 0
-    seeded[np.repeat(region, 3).reshape(m, 3)[has], corner_seg[has]] = True
-    ok = seeded[region, labels] | ~seeded[region].any(axis=1)
-    while not ok.all():
-        # each wrong face takes the most common segment of its right neighbours in its region
-        good = sp.csr_matrix((np.ones(int(ok.sum())), (np.flatnonzero(ok), labels[ok])),
-                             shape=(m, max(k, 1)))
-        votes = (A @ good).tocsr()[~ok]
-        reached = np.asarray(votes.sum(axis=1)).ravel() > 0
-        if not reached.any():
-            break
-        wrong = np.flatnonzero(~ok)[reached]
-        labels[wrong] = np.asarray(votes[reached].argmax(axis=1)).ravel()
-        ok[wrong] = True
-    return labels

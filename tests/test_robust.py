@@ -327,3 +327,16 @@ def test_robust_mode_on_coarse_generated_parts():
         # measured 0.985 / 0.946 / 0.928 purity and 0.975-0.992 coverage (before: 1 segment)
         assert purity(seg.labels, p.labels, area) >= 0.9, kind
         assert coverage(seg.labels, p.labels, area) >= 0.95, kind
+
+
+def test_merge_by_primitives_never_joins_the_two_sides_of_a_thin_wall():
+    from igl_heatseg.segmentation.robust import merge_by_primitives
+
+    # a slab 0.02 thick: its two big faces are within any loose tolerance of one plane
+    V, F, side = fine_box(3, scale=(1.0, 1.0, 0.02))
+    C = V[F].mean(axis=1)
+    top = C[:, 2] > 0.019
+    bottom = C[:, 2] < 0.001
+    labels = np.where(top, 0, np.where(bottom, 1, 2))
+    merged, _ = merge_by_primitives(V, F, labels, tol=0.1, ratio=0.0)
+    assert len(np.unique(merged[top | bottom])) == 2

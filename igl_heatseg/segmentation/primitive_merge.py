@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..mesh.geometry import face_normals
+from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
 
 __all__ = [
@@ -157,21 +157,31 @@ def primitive_type(P: np.ndarray, N: np.ndarray, h: float, diag: float) -> tuple
     return "Other", float(best)
 
 
-def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float) -> np.ndarray | None:
-    """Point residuals of the best of the plane, cylinder and sphere fits (None if too few)."""
+def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float, with_normals: bool = False):
+    """Point residuals of the best of the plane, cylinder and sphere fits (None if too few);
+    ``with_normals``: also a function giving that fit's unit normals at points."""
     if len(P) < _MIN_FIT_POINTS:
-        return None
+        return (None, None) if with_normals else None
     _, c, nrm = fit_plane(P)
-    cands = [(P - c) @ nrm]
+    cands = [((P - c) @ nrm, lambda X: np.broadcast_to(nrm, X.shape))]
     rc = fit_cylinder(P, N)
     if rc[3] < 10 * diag:
-        X = P - rc[1]
-        radial = X - np.outer(X @ rc[2], rc[2])
-        cands.append(np.linalg.norm(radial, axis=1) - rc[3])
+        def radial(X, p=rc[1], a=rc[2]):
+            Y = X - p
+            return Y - np.outer(Y @ a, a)
+
+        cands.append((np.linalg.norm(radial(P), axis=1) - rc[3],
+                      lambda X: _unit(radial(X))))
     rs = fit_sphere(P)
     if rs[2] < 10 * diag:
-        cands.append(np.linalg.norm(P - rs[1], axis=1) - rs[2])
-    return min(cands, key=lambda r: float((r * r).mean()))
+        cands.append((np.linalg.norm(P - rs[1], axis=1) - rs[2],
+                      lambda X, o=rs[1]: _unit(X - o)))
+    res, normals = min(cands, key=lambda rn: float((rn[0] * rn[0]).mean()))
+    return (res, normals) if with_normals else res
+
+
+def _unit(X: np.ndarray) -> np.ndarray:
+    return X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), 1e-300)
 
 
 def merge_by_primitives(
@@ -212,6 +222,8 @@ def merge_by_primitives(
     """
     topo = edge_topology(F) if topo is None else topo
     N = face_normals(V, F)
+    area = face_areas(V, F)
+    C = V[F].mean(axis=1)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     labels = labels.copy()
     faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
@@ -221,11 +233,16 @@ def merge_by_primitives(
         return math.inf if res is None else float(np.sqrt((res * res).mean()))
 
     def union_fit(fa, fb):
-        """RMS of the union's best fit over the points of each piece (the worse one)."""
+        """RMS of the union's best fit over the points of each piece (the worse one); inf
+        when the pieces face opposite ways on it (the two sides of a thin wall)."""
         va, vb = np.unique(F[fa]), np.unique(F[fb])
         vs = np.union1d(va, vb)
-        res = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
+        res, normals = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag, True)
         if res is None:
+            return math.inf
+        side_a = (area[fa] * np.einsum("ij,ij->i", N[fa], normals(C[fa]))).sum()
+        side_b = (area[fb] * np.einsum("ij,ij->i", N[fb], normals(C[fb]))).sum()
+        if side_a * side_b < 0:
             return math.inf
         ra, rb = res[np.searchsorted(vs, va)], res[np.searchsorted(vs, vb)]
         return float(max(np.sqrt((ra * ra).mean()), np.sqrt((rb * rb).mean())))

@@ -40,6 +40,17 @@ def fine_box(levels=4, scale=(2.0, 1.0, 0.5)):
     return V * np.asarray(scale), F, np.repeat(np.arange(6), 2 * 4**levels)
 
 
+def box_creases(F, side):
+    """Edge topology of a box and its creases (edges between two sides)."""
+    from igl_heatseg.mesh.topology import edge_topology
+
+    topo = edge_topology(F)
+    sharp = np.zeros(len(topo.E), dtype=bool)
+    inner = topo.interior
+    sharp[inner] = side[topo.EF[inner, 0]] != side[topo.EF[inner, 1]]
+    return topo, sharp
+
+
 def grid(n=30):
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
     V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], 1)
@@ -181,13 +192,9 @@ def test_robust_mode_separates_fillets_on_a_generated_part():
 
 def test_split_along_creases_separates_cube_sides():
     from igl_heatseg.segmentation.robust import split_along_creases
-    from igl_heatseg.mesh.topology import edge_topology
 
     V, F, side = fine_box(2)
-    topo = edge_topology(F)
-    sharp = np.zeros(len(topo.E), dtype=bool)
-    inner = topo.interior
-    sharp[inner] = side[topo.EF[inner, 0]] != side[topo.EF[inner, 1]]
+    topo, sharp = box_creases(F, side)
     F2, orig = split_along_creases(F, sharp, topo)
     assert np.array_equal(orig[F2], F)  # same geometry
     # every side becomes its own component, no vertex shared between sides
@@ -287,14 +294,10 @@ def test_dense_meshes_are_not_subdivided():
 
 
 def test_snap_to_creases_keeps_segments_on_their_side():
-    from igl_heatseg.mesh.topology import edge_topology
     from igl_heatseg.segmentation.robust import snap_to_creases
 
     V, F, side = fine_box(2)
-    topo = edge_topology(F)
-    sharp = np.zeros(len(topo.E), dtype=bool)
-    inner = topo.interior
-    sharp[inner] = side[topo.EF[inner, 0]] != side[topo.EF[inner, 1]]
+    topo, sharp = box_creases(F, side)
     rng = np.random.default_rng(1)
     # seeds: one vertex inside each side (no face of another side around it)
     vseg = np.full(len(V), -1)

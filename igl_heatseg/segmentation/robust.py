@@ -40,6 +40,16 @@ Pipeline of :func:`segment_robust`:
    (denoised) vertices; the simplest type whose RMS distance is within
    ``PRIMITIVE_TOL * h`` of the best is reported (``"Plane"``, ``"Cylinder"``, ``"Sphere"``,
    else ``"Other"``: cones, tori and freeform).
+7. **Surfaces**: adjacent segments that one quick primitive fits merge
+   (:func:`~igl_heatseg.segmentation.primitive_merge.merge_by_primitives`), then the fits of
+   :mod:`igl_heatseg.surfaces` refine the labels (:func:`~igl_heatseg.surfaces.refine_segmentation`:
+   on an exact CAD tessellation split, merge and move boundaries; on a noisy mesh only move
+   boundaries) and give every segment its surface.
+
+A coarse CAD export, whose vertices all lie on creases (so that step 2 finds no seed), runs
+steps 2-5 on a midpoint subdivision of itself (:mod:`igl_heatseg.segmentation.coarse`): the
+labels come back to its faces by the children's majority, after every segment is kept on its
+own side of the creases.
 """
 
 from __future__ import annotations

@@ -70,6 +70,14 @@ from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
 from ..surfaces.refine import fit_segments, refine_segmentation
 from ..surfaces.tolerance import exact_tessellation, vertex_tolerance
+from .coarse import (
+    MAX_SUBDIVIDE,
+    STARVED_SHARE,
+    children_majority,
+    snap_to_creases,
+    starved_share,
+    subdivision_levels,
+)
 from .denoise import BILATERAL_SIGMA_R, bilateral_normals, denoise_vertices
 from .paper import (
     SOLVERS,
@@ -79,14 +87,6 @@ from .paper import (
     group_seedless_components,
     heat_round,
     make_face_connected,
-)
-from .coarse import (
-    MAX_SUBDIVIDE,
-    STARVED_SHARE,
-    children_majority,
-    snap_to_creases,
-    starved_share,
-    subdivision_levels,
 )
 from .params import ROBUST_EPS, ROBUST_THETA, check_segment_params, check_solver, eps_keep
 from .primitive_merge import (

@@ -595,9 +595,10 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
 
 def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
     """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
-    RMS within GROW_TOL x tol, normals agreeing) join it; unexplained ones of fewer than MIN_REGION_FACES faces
-    join the nearest neighbour whatever the distance. A true small face (a chamfer two
-    triangles wide) is off its neighbours' surfaces and explained by its own: it stays."""
+    RMS within GROW_TOL x tol, normals agreeing) join it; unexplained ones of fewer than
+    MIN_REGION_FACES faces join the nearest neighbour whatever the distance. A true small face
+    (a chamfer two triangles wide) is off its neighbours' surfaces and explained by its own: it
+    stays."""
     labels = labels.copy()
     counts = np.bincount(labels)
     for k in np.flatnonzero((counts > 0) & (counts < SHARD_FACES)).tolist():

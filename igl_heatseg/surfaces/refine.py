@@ -366,11 +366,9 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
         if not free[seed] or tried[seed]:
             continue
         grown, s = _grow_one(V, F, FN, TT, free, seed, tol, W)
-        if not s.is_analytic:  # no surface explains the seed's patch: nor, mostly, the patches
-            # of its neighbours, which overlap it (on fandisk this halves the refinement time)
-            near = TT[seed]
+        if not s.is_analytic:  # nor, mostly, the overlapping patches of its 1-ring: skip them
             tried[seed] = True
-            tried[near[near >= 0]] = True
+            tried[TT[seed][TT[seed] >= 0]] = True
             continue
         # a rectangle of a coarse export is two triangles: a small region is kept when its
         # surface fits it well inside the tolerance (noise shards are absorbed later)
@@ -424,6 +422,9 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
         nbrs[b].add(a)
     heap = []
 
+    def agree(faces, s) -> bool:
+        return _normals_agree(V, F, FNs, faces, s)
+
     def smooth(a, b) -> bool:
         """The boundary bends less than a crease: facets of one curved surface, maybe."""
         return bend.get((min(a, b), max(a, b)), math.pi) <= UPGRADE_ANGLE
@@ -438,25 +439,20 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
         if key in rejected:
             return
         da, db = _rms_to(V, F, faces_of[b], fits[a]), _rms_to(V, F, faces_of[a], fits[b])
-        # (the normals too: a fan cap's vertices all lie on its cylinder's rim)
-        if da <= tol and _explains(fits[a], tol) and _normals_agree(V, F, FNs, faces_of[b],
-                                                                    fits[a]):
+        # normals too: a fan cap's vertices all lie on its cylinder's rim
+        if da <= tol and _explains(fits[a], tol) and agree(faces_of[b], fits[a]):
             u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
-        elif db <= tol and _explains(fits[b], tol) and _normals_agree(V, F, FNs, faces_of[a],
-                                                                      fits[b]):
+        elif db <= tol and _explains(fits[b], tol) and agree(faces_of[a], fits[b]):
             u = fits[b]
         elif min(da, db) <= PRECHECK_TOL * tol or smooth(a, b) or (
             max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
             and not _explains(fits[a], tol)
             and not _explains(fits[b], tol)
         ):
-            # no trimming: a union that needs its stray faces cut off is not one surface
-            u = _fit(V, F, np.concatenate([faces_of[a], faces_of[b]]), tol, W=W, FN=FN,
-                     trim=False)
-            # each part on its own: a small cap whose rim lies on a big cylinder is under the
-            # union's share of faces off the surface's normals
-            if u.is_analytic and not (_normals_agree(V, F, FNs, faces_of[a], u)
-                                      and _normals_agree(V, F, FNs, faces_of[b], u)):
+            # untrimmed (a union that needs faces cut off is not one surface), and the normals
+            # of each part on its own (a small cap on a big cylinder's rim passes the union's)
+            u = _fit(V, F, np.r_[faces_of[a], faces_of[b]], tol, W=W, FN=FN, trim=False)
+            if u.is_analytic and not (agree(faces_of[a], u) and agree(faces_of[b], u)):
                 u = Surface("freeform", {"centroid": np.zeros(3)}, area=u.area)
         else:
             rejected.add(key)

@@ -91,6 +91,7 @@ def subdivision_levels(
     theta: float = ROBUST_THETA,
     max_levels: int = MAX_SUBDIVIDE,
     max_faces: int = MAX_SUBDIVIDED_FACES,
+    off_crease: np.ndarray | None = None,
 ) -> int:
     """Levels of midpoint subdivision a mesh needs to have seeds on most of its area.
 
@@ -111,6 +112,8 @@ def subdivision_levels(
         At most this many levels.
     max_faces : int
         And no more faces than this after them.
+    off_crease : (n,) bool, optional
+        :func:`off_crease_vertices` of ``W`` at ``theta``, when the caller has it already.
 
     Returns
     -------
@@ -133,7 +136,9 @@ def subdivision_levels(
         if levels and F.shape[0] * 4 ** levels > max_faces:
             return levels - 1
         Wl, Fl = (W, F) if levels == 0 else igl.upsample(W, F, levels)
-        share = starved_share(Fl, off_crease_vertices(Wl, Fl, theta), np.repeat(area, 4 ** levels))
+        seeds = off_crease if levels == 0 and off_crease is not None else \
+            off_crease_vertices(Wl, Fl, theta)
+        share = starved_share(Fl, seeds, np.repeat(area, 4 ** levels))
         if share <= STARVED_SHARE:
             return levels
     return max_levels

@@ -157,11 +157,11 @@ def primitive_type(P: np.ndarray, N: np.ndarray, h: float, diag: float) -> tuple
     return "Other", float(best)
 
 
-def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float, with_normals: bool = False):
-    """Point residuals of the best of the plane, cylinder and sphere fits (None if too few);
-    ``with_normals``: also a function giving that fit's unit normals at points."""
+def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float):
+    """Point residuals of the best of the plane, cylinder and sphere fits and a function giving
+    that fit's unit normals at points; (None, None) if too few points."""
     if len(P) < _MIN_FIT_POINTS:
-        return (None, None) if with_normals else None
+        return None, None
     _, c, nrm = fit_plane(P)
     cands = [((P - c) @ nrm, lambda X: np.broadcast_to(nrm, X.shape))]
     rc = fit_cylinder(P, N)
@@ -177,7 +177,7 @@ def _best_residuals(P: np.ndarray, N: np.ndarray, diag: float, with_normals: boo
         cands.append((np.linalg.norm(P - rs[1], axis=1) - rs[2],
                       lambda X, o=rs[1]: _unit(X - o)))
     res, normals = min(cands, key=lambda rn: float((rn[0] * rn[0]).mean()))
-    return (res, normals) if with_normals else res
+    return res, normals
 
 
 def _unit(X: np.ndarray) -> np.ndarray:
@@ -229,7 +229,7 @@ def merge_by_primitives(
     faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
 
     def fit(fs):
-        res = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
+        res, _ = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
         return math.inf if res is None else float(np.sqrt((res * res).mean()))
 
     def union_fit(fa, fb):
@@ -237,7 +237,7 @@ def merge_by_primitives(
         when the pieces face opposite ways on it (the two sides of a thin wall)."""
         va, vb = np.unique(F[fa]), np.unique(F[fb])
         vs = np.union1d(va, vb)
-        res, normals = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag, True)
+        res, normals = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
         if res is None:
             return math.inf
         side_a = (area[fa] * np.einsum("ij,ij->i", N[fa], normals(C[fa]))).sum()

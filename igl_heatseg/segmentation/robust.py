@@ -460,7 +460,7 @@ def segment_robust(
         seed &= ~crease
     band = off_crease & ~seed  # near a crease: no seed of its own, but not on the crease
     if subdivide is None:
-        subdivide = subdivision_levels(W, F, theta)
+        subdivide = subdivision_levels(W, F, theta, off_crease=off_crease)
     if subdivide > 0:
         return _on_subdivision(
             mesh, W, int(subdivide), sharp, noise_angle, timings,
@@ -520,15 +520,17 @@ def segment_robust(
     timings["heat_final"] = time.perf_counter() - t
 
     k1 = len(kept)
+    vtol = _fit_tolerance(V, F, merge, refine, fit_surfaces)
     if merge:
         t = time.perf_counter()
         tol = (MERGE_TOL + MERGE_NOISE * noise_angle) * h
         # capped by the distance tolerance: the dihedral estimate explodes on slivers
-        tol = min(tol, max(MERGE_TOL * h, vertex_tolerance(V, F)))
+        tol = min(tol, max(MERGE_TOL * h, vtol))
         labels1, _ = merge_by_primitives(W, F, labels1, tol, topo=topo)
         timings["merge"] = time.perf_counter() - t
     labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
-        V, F, W, N, h, labels1, hl1.vertex_labels, k1, refine, fit_surfaces, progress, timings
+        V, F, W, N, h, labels1, hl1.vertex_labels, k1, refine, fit_surfaces, progress, timings,
+        vtol,
     )
 
     return RobustSegmentation(
@@ -562,14 +564,19 @@ def segment_robust(
     )
 
 
-def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings):
+def _fit_tolerance(V, F, merge, refine, fit_surfaces) -> float | None:
+    """:func:`vertex_tolerance` of the input, once, when a merge, refinement or fit needs it."""
+    return vertex_tolerance(V, F) if merge or refine != "off" or fit_surfaces else None
+
+
+def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings, vtol):
     """The common end of :func:`segment_robust`: refinement (``refine``: "full", "moves" or
     "off") or one fit per segment, the final numbering, the old primitive types."""
     n = V.shape[0]
     surfaces = None
     if refine != "off":  # "full": split, merge and move; "moves": boundary moves only
         t = time.perf_counter()
-        ref = refine_segmentation(V, F, labels1, vertex_tolerance(V, F), normals_from=W,
+        ref = refine_segmentation(V, F, labels1, vtol, normals_from=W,
                                   progress=progress, split=refine == "full",
                                   merge=refine == "full")
         labels1, k1 = ref.labels, len(ref.surfaces)
@@ -584,7 +591,7 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
         surfaces = [surfaces[g] for g in order]
     elif fit_surfaces:  # one surface per segment, the labels as they are
         t = time.perf_counter()
-        surfaces = fit_segments(V, F, labels, vertex_tolerance(V, F), normals_from=W)
+        surfaces = fit_segments(V, F, labels, vtol, normals_from=W)
         timings["surfaces"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -627,13 +634,14 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
     seg_of_group[fine.segment_group] = np.arange(len(fine.segment_group))
     vseg = np.where(fine.final_group >= 0, seg_of_group[fine.final_group], -1)
     fine_labels = snap_to_creases(Ff, fine.labels, vseg, fine_sharp, fine_topo)
+    vtol = _fit_tolerance(V, F, merge, refine, fit_surfaces)
     if merge:
         # on the subdivided surface, whose points inside a fan cap are off the cylinder its rim
         # lies on; the tolerance is the fits' (the dihedral noise estimate of the dense path
         # explodes on slivers: a median of 60 deg at noise 0.1 h)
         t = time.perf_counter()
-        tol = max(MERGE_TOL * h, vertex_tolerance(V, F))
-        fine_labels, _ = merge_by_primitives(Wf, Ff, fine_labels, tol)
+        tol = max(MERGE_TOL * h, vtol)
+        fine_labels, _ = merge_by_primitives(Wf, Ff, fine_labels, tol, topo=fine_topo)
         timings["merge"] = time.perf_counter() - t
     labels1 = children_majority(fine_labels, m, children)
     labels1, _ = make_face_connected(V, F, labels1, np.full(n, -1, dtype=np.int64),
@@ -642,7 +650,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
     N = face_normals(W, F)
     labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
         V, F, W, N, h, labels1, fine.vertex_labels[:n], k1, refine, fit_surfaces,
-        kw["progress"], timings,
+        kw["progress"], timings, vtol,
     )
     return RobustSegmentation(
         labels=labels,

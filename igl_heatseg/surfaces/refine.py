@@ -453,11 +453,10 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
             # of each part on its own (a small cap on a big cylinder's rim passes the union's)
             u = _fit(V, F, np.r_[faces_of[a], faces_of[b]], tol, W=W, FN=FN, trim=False)
             if u.is_analytic and not (agree(faces_of[a], u) and agree(faces_of[b], u)):
-                u = Surface("freeform", {"centroid": np.zeros(3)}, area=u.area)
+                u = None
         else:
-            rejected.add(key)
-            return
-        if not _explains(u, tol):
+            u = None
+        if u is None or not _explains(u, tol):
             rejected.add(key)
         else:
             cost = min(da, db) if u is fits[a] or u is fits[b] else u.rms

@@ -493,3 +493,25 @@ def test_split_for_distortion_lowers_the_energy_of_a_strongly_curved_chart():
     area = np.array([len(r) for r, _, _ in out], dtype=float)
     mean = sum(q.distortion["sym_dirichlet"] * a for (_, _, q), a in zip(out, area, strict=True))
     assert mean / area.sum() < whole.distortion["sym_dirichlet"]
+
+
+def test_split_for_distortion_halves_a_chart_without_interior_vertices():
+    """A coarse export's chart (a strip: every vertex on its boundary) has no seam through
+    an interior vertex; it is halved into two disks instead (before: no split)."""
+    from igl_heatseg.parameterization.cut import chart_topology
+    from igl_heatseg.parameterization.split import split_for_distortion
+
+    # a strip of 16 triangles bent along a half circle (no interior vertex)
+    t = np.linspace(0, np.pi, 9)
+    top = np.c_[np.cos(t), np.sin(t), np.full(9, 0.4)]
+    bot = np.c_[np.cos(t), np.sin(t), np.zeros(9)]
+    V = np.vstack([bot, top])
+    F = np.array([f for i in range(8) for f in ([i, i + 1, 10 + i], [i, 10 + i, 9 + i])])
+    # a map squeezing the right half: far from isometric, still bijective
+    s = np.r_[0, np.cumsum(np.linalg.norm(np.diff(bot, axis=0), axis=1))]
+    s = np.where(s > s[-1] / 2, s[-1] / 2 + 0.1 * (s - s[-1] / 2), s)
+    UV = np.c_[np.r_[s, s], np.r_[np.zeros(9), np.full(9, 0.4)]]
+    pieces = split_for_distortion(V, F, UV)
+    assert pieces is not None and len(pieces) == 2
+    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
+    assert all(chart_topology(F[p]).is_disk for p in pieces)

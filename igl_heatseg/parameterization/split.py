@@ -15,6 +15,10 @@ through its region of highest stretch, and each piece is mapped again (recursive
    first and ends at least a quarter of the boundary length away from it;
 3. the chord ``b1 -> v* -> b2`` splits the disk into two disks (the faces on either side).
 
+A chart below ``2 *`` :data:`SPLIT_MIN_FACES` faces, or one without such a seam (a coarse CAD
+export's chart has no interior vertex), is halved instead: by a straight line through its map,
+or into the faces nearest to one end of it and the rest (:func:`_halve`).
+
 :func:`cut_for_packing` cuts a long chart (a strip, e.g. the side of a ring) straight across
 its length, and halves a chart that fills its rectangle badly (a ring cut open), into pieces
 that keep its map: a strip of aspect ratio ``a`` alone caps the fill of a square atlas at
@@ -57,7 +61,7 @@ log = logging.getLogger(__name__)
 SPLIT_SD_MAX: float = 5.0
 
 #: Recursion depth of the splitting (a chart becomes at most ``2 ** depth`` pieces).
-SPLIT_MAX_DEPTH: int = 4
+SPLIT_MAX_DEPTH: int = 6
 
 #: A split is kept when the pieces' area-weighted mean energy is below this fraction of the
 #: whole chart's.
@@ -67,8 +71,15 @@ SPLIT_MIN_GAIN: float = 0.98
 #: the largest distance from the boundary.
 SPLIT_CORE: float = 0.3
 
-#: Pieces smaller than this (faces) are not split again, and a split leaving one is refused.
+#: A split along a seam leaving a piece smaller than this (faces) is refused; smaller
+#: charts are halved by a straight line through their map instead.
 SPLIT_MIN_FACES: int = 20
+
+
+#: Directions of the straight cuts :func:`_halve` tries, and the shares of the faces the
+#: piece grown from one end of a direction may take.
+HALVE_DIRECTIONS: int = 8
+HALVE_FRACTIONS: tuple = (0.5, 0.35, 0.65, 0.2, 0.8)
 
 
 def _seam(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> np.ndarray | None:
@@ -159,8 +170,10 @@ def split_for_distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list |
     Returns
     -------
     list of (m_i,) int64 or None
-        Face indices of the two pieces (each a disk with at least :data:`SPLIT_MIN_FACES`
-        faces), or ``None`` when no such split exists.
+        Face indices of the two pieces (each a disk), or ``None`` when no split exists.  A
+        chart of at least ``2 *`` :data:`SPLIT_MIN_FACES` faces is split along the seam (no
+        piece below :data:`SPLIT_MIN_FACES`); a smaller one, or one with no such seam, by a
+        straight line through its map into two halves.
 
     Examples
     --------
@@ -176,6 +189,57 @@ def split_for_distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list |
     """
     F = np.asarray(F, dtype=np.int64)
     UV = np.nan_to_num(np.asarray(UV, dtype=np.float64))
+    pieces = _split_at_seam(V, F, UV) if len(F) >= 2 * SPLIT_MIN_FACES else None
+    return pieces if pieces is not None else _halve(F, UV)
+
+
+def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
+    """Two disks of about half the chart's faces each: on either side of a straight line
+    through the map (at the median of the face centroids, in one of
+    :data:`HALVE_DIRECTIONS` directions), else the faces nearest, over the faces' adjacency,
+    to the face at one end of a direction (a share of :data:`HALVE_FRACTIONS`) and the
+    rest.  The split of a chart too small, or with no interior vertex, for a seam (a coarse
+    export's chart, all of whose vertices lie on its boundary)."""
+    if len(F) < 2:
+        return None
+    C = UV[F].mean(axis=1)
+    half = len(F) // 2
+    topo = edge_topology(F)
+    ef = topo.EF[topo.edge_face_count == 2]
+    m = len(F)
+    rows, cols = np.r_[ef[:, 0], ef[:, 1]], np.r_[ef[:, 1], ef[:, 0]]
+    A = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
+    for t in np.arange(HALVE_DIRECTIONS) * np.pi / HALVE_DIRECTIONS:
+        x = C @ np.array([np.cos(t), np.sin(t)])
+        order = np.argsort(x, kind="stable")  # a straight cut across the map
+        pieces = [np.sort(order[:half]), np.sort(order[half:])]
+        if all(_is_disk(F[p]) for p in pieces):
+            return pieces
+    for t in np.arange(HALVE_DIRECTIONS) * np.pi / HALVE_DIRECTIONS:
+        x = C @ np.array([np.cos(t), np.sin(t)])
+        # the faces nearest (over the faces' adjacency) to the face at that end
+        d = sp_dijkstra(A, directed=False, indices=int(np.argmin(x)), unweighted=True)
+        order = np.lexsort((x, d))
+        for frac in HALVE_FRACTIONS:
+            k = min(max(int(round(frac * m)), 1), m - 1)
+            pieces = [np.sort(order[:k]), np.sort(order[k:])]
+            if all(_is_disk(F[p]) for p in pieces):
+                return pieces
+    return None
+
+
+def _is_disk(F: np.ndarray) -> bool:
+    """One face-connected piece that is a topological disk."""
+    topo = edge_topology(F)
+    ef = topo.EF[topo.edge_face_count == 2]
+    m = len(F)
+    A = sp.csr_matrix((np.ones(len(ef)), (ef[:, 0], ef[:, 1])), shape=(m, m))
+    return connected_components(A, directed=False)[0] == 1 and \
+        chart_topology(F, name="piece").is_disk
+
+
+def _split_at_seam(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list | None:
+    """The two pieces on either side of :func:`_seam`, or None."""
     seam = _seam(V, F, UV)
     if seam is None or len(seam) < 3:
         return None
@@ -294,7 +358,7 @@ def parameterize_pieces(
     p = param(res.V, res.F, name, start)
     whole = [(np.arange(len(res.F)), res, p)]
     sd = p.distortion.get("sym_dirichlet", np.inf)
-    if not p.bijective or sd <= sd_max or max_depth <= 0 or len(res.F) < 2 * SPLIT_MIN_FACES:
+    if not p.bijective or sd <= sd_max or max_depth <= 0 or len(res.F) < 2:
         return whole
     pieces = split_for_distortion(res.V, res.F, p.UV)
     if pieces is None:

@@ -300,3 +300,42 @@ def test_stages_by_hand_give_the_pipeline_s_report(can_mesh):
     with pytest.raises(AttributeError):
         side.report = {}
     assert set(res.report) == {"charts", "parameterization", "timings"}
+
+
+def _cap(theta_max, nr=12, nt=32):
+    th = np.linspace(0, theta_max, nr + 1)[1:]
+    ph = np.linspace(0, 2 * np.pi, nt, endpoint=False)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    ring = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
+    V = np.r_[[[0.0, 0.0, 1.0]], ring]
+    F = [[0, 1 + j, 1 + (j + 1) % nt] for j in range(nt)]
+    for i in range(nr - 1):
+        for j in range(nt):
+            a, b = 1 + i * nt + j, 1 + i * nt + (j + 1) % nt
+            F += [[a, a + nt, b + nt], [a, b + nt, b]]
+    return V, np.array(F)
+
+
+def test_mesh_mean_energy_is_brought_under_its_bound(monkeypatch):
+    """A single chart below the per-chart split threshold (5) but above the per-mesh bound
+    (4.3) is split by the mesh-level pass, so the mesh's mean energy meets the bound."""
+    import igl_heatseg.pipeline.stages as stages
+    from igl_heatseg.parameterization.split import MESH_SD_MAX, SPLIT_SD_MAX
+
+    V, F = _cap(1.9)  # most of a hemisphere and a bit more: one chart of energy ~4.3-5
+    mesh = validate_mesh(V, F)
+
+    def mapped():
+        charts = stages.cut_charts(mesh, stages.extract_charts(mesh, np.zeros(len(F), int)))
+        out, _, _ = stages.parameterize_charts(mesh, charts)
+        sd = np.array([c.param.distortion["sym_dirichlet"] for c in out])
+        a = np.array([c.area for c in out])
+        return out, float((sd * a).sum() / a.sum())
+
+    monkeypatch.setattr(stages, "MESH_SD_MAX", 1e9)  # the pass off
+    whole, sd_whole = mapped()
+    monkeypatch.undo()
+    assert len(whole) == 1 and MESH_SD_MAX < sd_whole <= SPLIT_SD_MAX
+    pieces, sd_mesh = mapped()
+    assert len(pieces) >= 2 and all(c.param.bijective for c in pieces)
+    assert sd_mesh <= MESH_SD_MAX

@@ -44,6 +44,7 @@ __all__ = [
     "restrict_cut",
     "parameterize_pieces",
     "SPLIT_SD_MAX",
+    "MESH_SD_MAX",
     "SPLIT_MAX_DEPTH",
     "SPLIT_MIN_FACES",
     "split_for_packing",
@@ -59,6 +60,10 @@ log = logging.getLogger(__name__)
 #: Charts whose chosen map has an area-weighted mean symmetric Dirichlet energy above this are
 #: split (issue 13 asks for at most 6 per chart and 4.3 per mesh).
 SPLIT_SD_MAX: float = 5.0
+
+#: A mesh whose charts' area-weighted mean energy is above this has its worst charts split
+#: with this bound (issue 13: at most 4.3 per mesh; see the pipeline's parameterize_charts).
+MESH_SD_MAX: float = 4.3
 
 #: Recursion depth of the splitting (a chart becomes at most ``2 ** depth`` pieces).
 SPLIT_MAX_DEPTH: int = 6

@@ -259,6 +259,14 @@ def _fmt(x, fmt="{:.2f}", none="-"):
     return none if x is None or (isinstance(x, float) and not np.isfinite(x)) else fmt.format(x)
 
 
+def _sampled(rel) -> str:
+    """The sampled B-Rep-to-mesh distance; beyond the part's own size it is a face whose
+    trimming the classifier does not bound (an inverted or lost loop), not a distance."""
+    if rel is not None and np.isfinite(rel) and rel > 1.0:
+        return "unbounded face"
+    return _fmt(None if rel is None else 100 * rel, "{:.2f} %")
+
+
 def _cell(r: dict | None, ours: bool) -> list[str]:
     if r is None:
         return ["not run"] + [""] * (6 if ours else 5)
@@ -271,8 +279,7 @@ def _cell(r: dict | None, ours: bool) -> list[str]:
     if ours:
         cells.append(f"{r['segments']} ({r['faceted_segments']})")
     cells += [_fmt(100 * r["hausdorff_rel"], "{:.2f} %"),
-              _fmt(100 * r["sampled_rel"] if r.get("sampled_rel") is not None else None,
-                   "{:.2f} %"),
+              _sampled(r.get("sampled_rel")),
               _fmt(None if r["volume_rel_error"] is None else 100 * r["volume_rel_error"],
                    "{:.2f} %"),
               f"{r['seconds']:.0f}"]

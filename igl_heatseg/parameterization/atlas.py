@@ -433,22 +433,22 @@ def pack_charts(
     method = "boxes"
     xy = np.empty_like(xy_sorted)
     xy[order] = xy_sorted
-    turns = turned.astype(np.int64)
+    turn = turned * (np.pi / 2)  # extra rotation of every chart, radians
     if packer == "outlines" or (packer == "auto" and k <= OUTLINE_MAX_CHARTS):
-        offsets, q_turns = pack_outlines(local, F_list, gutter)
-        placed = [rotate_points(local[i], q_turns[i] * np.pi / 2) for i in range(k)]
+        offsets, angles = pack_outlines(local, F_list, g)
+        placed = [rotate_points(local[i], angles[i]) for i in range(k)]
         placed = [P - P.min(axis=0) + offsets[i] for i, P in enumerate(placed)]
         lo = np.min([P.min(axis=0) for P in placed], axis=0)
         side_o = float((np.max([P.max(axis=0) for P in placed], axis=0) - lo).max()) + g
         if packer == "outlines" or side_o < side:
-            side, turns = side_o, q_turns
+            side, turn = side_o, angles
             xy = np.array([P.min(axis=0) - lo for P in placed])
             method = "outlines"
-    for i in np.flatnonzero(turns):
-        # quarter turns (still a rotation: orientation kept), back into the box's corner
-        local[i] = rotate_points(local[i], turns[i] * np.pi / 2)
+    for i in np.flatnonzero(turn):
+        # a rotation (orientation kept), back into the box's corner
+        local[i] = rotate_points(local[i], turn[i])
         local[i] -= local[i].min(axis=0)
-        t = rotations[i] + turns[i] * np.pi / 2
+        t = rotations[i] + turn[i]
         rotations[i] = np.arctan2(np.sin(t), np.cos(t))
     # The whole layout (with a half gutter around every chart) maps to [0, 1]^2.
     scale = 1.0 / side

@@ -1,38 +1,87 @@
 """Pack charts by their outlines on a raster (issue 13: an atlas as tight as xatlas).
 
 Every chart map is bijective, so its image is the polygon bounded by the image of its boundary
-loops.  Each chart (already rotated to its minimum-area rectangle and scaled to the common
-texel density) is rasterised *conservatively*: the pixels whose centre lies inside the polygon
-plus those holding a sample of its boundary (samples at most half a pixel apart), grown by one
-pixel, so that the chart lies inside its pixels.  Charts are placed largest first, each at the
-position and quarter turn (a rotation: orientation kept) that keeps the layout's square side
-smallest (then lowest, then leftmost), where its pixels grown by the gutter meet no placed
-chart's pixels; collisions for every position at once come from one FFT correlation.  Two
-charts are thus at least the gutter apart (in pixels, a little more in atlas units) and never
-overlap, although their bounding boxes may.
+loops.  Each chart (scaled to the common texel density) is rasterised *exactly
+conservatively* at several rotation angles: the pixels that meet the closed polygon (pixel
+centres inside it, plus every pixel a boundary edge passes through).  The pixels closer than
+the gutter to a chart's pixels form its *halo*; two charts are apart by at least the gutter
+when neither's pixels meet the other's halo.
+
+Charts are placed one by one (longest side or largest area first) in a square *bin* of
+``s`` pixels: among the positions where the chart's halo meets no placed chart and stays
+inside the bin, the one whose outline touches the most placed charts or bin walls (the
+"contact" of the pixel ring around the halo, as a fraction of that ring), then the lowest,
+then the leftmost; over all its angles.  Collisions and contact for every position at once
+come from one FFT correlation of the occupancy grid with ``M * halo + ring``
+(``M`` = ring size + 1).  A chart that fits nowhere grows the bin as little as possible.
+Several layouts (chart orders, starting bin sizes) are tried and the smallest kept.
+
+Charts are thus at least the gutter apart and never overlap (although their bounding boxes
+may), every chart is only rotated (orientation kept) and translated.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
-from scipy.signal import fftconvolve
+from scipy import fft, ndimage
 
 from ..mesh.topology import boundary_loops
 
-__all__ = ["rasterize_chart", "pack_outlines", "OUTLINE_PIXELS", "OUTLINE_MAX_CHARTS"]
+__all__ = [
+    "rasterize_chart",
+    "gutter_structure",
+    "pack_outlines",
+    "OUTLINE_PIXELS",
+    "OUTLINE_MAX_CHARTS",
+]
 
 #: Pixels covered by all charts together (sets the texel size of the raster).
-OUTLINE_PIXELS: int = 120_000
+OUTLINE_PIXELS: int = 60_000
 
-#: Outline packing is used up to this many charts (FFT per chart and quarter turn).
+#: Outline packing is used up to this many charts.
 OUTLINE_MAX_CHARTS: int = 300
+
+#: Rotations tried for the charts holding at least :data:`_BIG_SHARE` of the total area, and
+#: for the others (evenly spaced over a full turn, starting at the minimum-area rectangle).
+_ANGLES_BIG, _ANGLES_SMALL = 8, 4
+_BIG_SHARE = 0.02
+
+#: Work allowed for all layouts together, in correlated pixels (grid pixels summed over
+#: every chart angle tried), and the first bin tried as a fill of the chart pixels.
+_WORK = 3e8
+_OVERHEAD = 8000
+_FIRST_FILL = 0.8
+_RING = 8
+_RING_F = 0.25
+_M = 1
+_JITTERED = 20
+_JITTER = 0.2
+
+#: Rounding margin (pixel units) used when a coordinate falls on a pixel border.
+_EPS = 1e-7
+
+#: Charts are rasterised with their minimum this far (pixel units) inside their corner
+#: pixel, so that the pixels left of and below it (touched on their border) stay empty.
+_SHIFT = 1e-5
+
+
+def _mark(M: np.ndarray, ii: np.ndarray, jj: np.ndarray) -> None:
+    ok = (ii >= 0) & (ii < M.shape[0]) & (jj >= 0) & (jj < M.shape[1])
+    M[ii[ok], jj[ok]] = True
+
+
+def _ranges(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All integers ``lo[e] <= k < hi[e]``: ``(e, k)`` pairs."""
+    n = np.maximum(hi - lo, 0)
+    e = np.repeat(np.arange(len(lo)), n)
+    k = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + np.repeat(lo, n)
+    return e, k
 
 
 def rasterize_chart(
     P: np.ndarray, F: np.ndarray, texel: float, pad: int, loops: list | None = None
 ) -> np.ndarray:
-    """Conservative pixel mask of a chart's image (see the module docstring).
+    """Exactly conservative pixel mask of a chart's image: every pixel meeting the polygon.
 
     Parameters
     ----------
@@ -56,156 +105,307 @@ def rasterize_chart(
     --------
     >>> import numpy as np
     >>> sq = np.array([[0.0, 0], [4, 0], [4, 4], [0, 4]]); F = np.array([[0, 1, 2], [0, 2, 3]])
-    >>> M = rasterize_chart(sq, F, 1.0, 0)
+    >>> M = rasterize_chart(sq + 0.5, F, 1.0, 0)  # a 4 x 4 square across 5 x 5 pixels
     >>> M.shape, int(M.sum())
-    ((6, 6), 36)
+    ((5, 5), 25)
+    >>> int(rasterize_chart(sq * 0.999, F, 1.0, 1)[1:-1, 1:-1].sum())
+    16
     """
-    ext = P.max(axis=0) / texel
-    w = int(np.ceil(ext[0])) + 2 + 2 * pad
-    h = int(np.ceil(ext[1])) + 2 + 2 * pad
-    M = np.zeros((h, w), dtype=bool)
     loops = boundary_loops(F) if loops is None else loops
     X = P / texel + pad  # pixel units
-    # interior: pixel centres inside the polygon (even-odd over all loops), row by row
+    w = int(np.floor(X[:, 0].max() + _EPS)) + 1 + pad
+    h = int(np.floor(X[:, 1].max() + _EPS)) + 1 + pad
+    M = np.zeros((h, w), dtype=bool)
     A = np.concatenate([X[lp] for lp in loops])
     B = np.concatenate([X[np.roll(lp, -1)] for lp in loops])
-    ys = np.arange(h) + 0.5
+    # interior: pixel centres inside the polygon (even-odd over all loops), a span per pair
+    # of crossings of a row's centre line
     lo, hi = np.minimum(A[:, 1], B[:, 1]), np.maximum(A[:, 1], B[:, 1])
-    for i, y in enumerate(ys):
-        e = np.flatnonzero((lo <= y) & (hi > y))
-        if len(e) < 2:
-            continue
+    e, rows = _ranges(np.ceil(lo - 0.5).astype(np.int64), np.ceil(hi - 0.5).astype(np.int64))
+    a, b = A[e], B[e]
+    xs = a[:, 0] + (rows + 0.5 - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    o = np.lexsort((xs, rows))
+    rows, xs = rows[o][0::2], xs[o]
+    j0 = np.clip(np.ceil(xs[0::2] - 0.5).astype(np.int64), 0, w)
+    j1 = np.clip(np.floor(xs[1::2] - 0.5).astype(np.int64) + 1, 0, w)
+    keep = j1 > j0
+    span = np.zeros((h, w + 1), dtype=np.int32)
+    np.add.at(span, (rows[keep], j0[keep]), 1)
+    np.add.at(span, (rows[keep], j1[keep]), -1)
+    M |= np.cumsum(span, axis=1)[:, :w] > 0
+    # boundary: the pixels on both sides of every crossing of a grid line, and the vertices'
+    for ax in (0, 1):
+        lo, hi = np.minimum(A[:, ax], B[:, ax]), np.maximum(A[:, ax], B[:, ax])
+        e, k = _ranges(np.ceil(lo).astype(np.int64), np.floor(hi).astype(np.int64) + 1)
         a, b = A[e], B[e]
-        xs = np.sort(a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))
-        for x0, x1 in zip(xs[0::2], xs[1::2], strict=False):
-            j0 = max(int(np.ceil(x0 - 0.5)), 0)
-            j1 = min(int(np.floor(x1 - 0.5)), w - 1)
-            if j1 >= j0:
-                M[i, j0 : j1 + 1] = True
-    # boundary: samples at most half a pixel apart along every boundary edge
-    L = np.linalg.norm(B - A, axis=1)
-    k = np.maximum(np.ceil(2 * L).astype(np.int64), 1)
-    t = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
-    S = np.repeat(A, k, axis=0) + t[:, None] * np.repeat(B - A, k, axis=0)
-    S = np.concatenate([S, X])
-    jj = np.clip(np.floor(S[:, 0]).astype(np.int64), 0, w - 1)
-    ii = np.clip(np.floor(S[:, 1]).astype(np.int64), 0, h - 1)
-    M[ii, jj] = True
-    return ndimage.binary_dilation(M, structure=np.ones((3, 3), dtype=bool))
+        d = b[:, ax] - a[:, ax]
+        t = (k - a[:, ax]) / np.where(d != 0, d, 1.0)
+        v = a[:, 1 - ax] + t * (b[:, 1 - ax] - a[:, 1 - ax])
+        for dv in (-_EPS, _EPS):
+            c = np.floor(v + dv).astype(np.int64)
+            for dk in (-1, 0):
+                _mark(M, *((c, k + dk) if ax == 0 else (k + dk, c)))
+    for dx in (-_EPS, _EPS):
+        for dy in (-_EPS, _EPS):
+            ii = np.floor(X[:, 1] + dy).astype(np.int64)
+            _mark(M, ii, np.floor(X[:, 0] + dx).astype(np.int64))
+    return M
 
 
-def _place(occ: np.ndarray, D: np.ndarray, box: tuple, used: tuple[int, int]):
-    """Best free position of mask ``D`` (the chart grown by the gutter) on the occupancy grid
-    ``occ``: ``(side, y, x)`` or ``None``; ``box`` = last row and column of the chart's own
-    pixels in ``D``'s frame (plus one)."""
-    H, W = occ.shape
-    h, w = D.shape
-    if h > H or w > W:
+def gutter_structure(gap: float) -> np.ndarray:
+    """Pixel offsets ``(di, dj)`` whose pixel squares are closer than ``gap`` (pixel units).
+
+    Dilating a chart's pixels by this structure gives its halo: pixels outside it are at
+    least ``gap`` from every pixel of the chart.
+
+    Parameters
+    ----------
+    gap : float
+        Distance in pixels, ``>= 0``.
+
+    Returns
+    -------
+    (2 r + 1, 2 r + 1) bool
+        Centred at ``(r, r)``.
+
+    Examples
+    --------
+    >>> gutter_structure(0.0).astype(int).tolist()
+    [[1]]
+    >>> gutter_structure(1.2).astype(int).tolist()
+    [[0, 1, 1, 1, 0], [1, 1, 1, 1, 1], [1, 1, 1, 1, 1], [1, 1, 1, 1, 1], [0, 1, 1, 1, 0]]
+    """
+    r = int(np.ceil(gap)) + 1
+    d = np.maximum(np.abs(np.arange(-r, r + 1)) - 1, 0).astype(np.float64)
+    S = np.hypot(d[:, None], d[None, :]) < gap
+    S[r, r] = True
+    keep = np.flatnonzero(S.any(axis=0))
+    r0 = r - int(keep[0]) if len(keep) else r
+    return S[r - r0 : r + r0 + 1, r - r0 : r + r0 + 1]
+
+
+class _Shape:
+    """One chart at one angle: its pixels ``R`` (``pad`` empty pixels around), the
+    correlation kernel ``K = M * halo + ring`` (one more pixel around), its extent in
+    pixels ``hr, wr`` from the chart's corner pixel ``(pad, pad)``."""
+
+    __slots__ = ("R", "K", "halo", "ring", "hr", "wr", "angle", "b")
+
+    def __init__(self, R: np.ndarray, halo: np.ndarray, pad: int, angle: float, r: int):
+        self.b = r
+        Dp = np.pad(halo, r)
+        box = np.ones((2 * r + 1, 2 * r + 1), dtype=bool)
+        ring = (ndimage.binary_dilation(Dp, box) & ~Dp).astype(np.float32)
+        self.R = R
+        self.ring = int(ring.sum())
+        self.K = (Dp + ring * (0.5 / max(self.ring, 1))).astype(np.float32)
+        self.halo = Dp
+        rows, cols = np.nonzero(R)
+        self.hr = int(rows.max()) + 1 - pad
+        self.wr = int(cols.max()) + 1 - pad
+        self.angle = angle
+
+
+def _rotate(P: np.ndarray, t: float) -> np.ndarray:
+    c, s = np.cos(t), np.sin(t)
+    return P @ np.array([[c, s], [-s, c]])
+
+
+def _shapes(local: list, faces: list, texel: float, gap: float, n_angles: list) -> tuple:
+    """Every chart's :class:`_Shape` per angle, and the pad (halo radius) in pixels."""
+    S = gutter_structure(gap)
+    pad = S.shape[0] // 2
+    out = []
+    for P, F, na in zip(local, faces, n_angles, strict=True):
+        loops = boundary_loops(F)
+        rot = []
+        r = 0
+        for t in np.arange(na) * (2 * np.pi / na):
+            Q = _rotate(P, t) if t else P
+            R = rasterize_chart(Q - Q.min(axis=0) + _SHIFT * texel, F, texel, pad, loops)
+            if not r:
+                r = _RING if _RING_F <= 0 else \
+                    int(np.clip(round(_RING_F * np.sqrt(R.sum())), 2, 16))
+            rot.append(_Shape(R, ndimage.binary_dilation(R, S) if pad else R, pad, float(t), r))
+        out.append(rot)
+    return out, pad
+
+
+def _best(W: np.ndarray, Wh: np.ndarray, sh: _Shape, n: int, mode: str, side: int):
+    """Best position of shape ``sh`` on the grid ``W`` (spectrum ``Wh``) where the halo's
+    frame spans ``n`` pixels: ``(key, y, x)`` or ``None``; the larger key is better.
+
+    ``mode``: ``"contact"``: the contact fraction in thousandths, then the lowest, then the
+    leftmost position; ``"grow"``: the smallest bin side reached (from ``side``) first, then
+    as ``"contact"``; ``"down"`` / ``"left"``: the lowest / leftmost position.
+    """
+    kh, kw = sh.K.shape
+    ny, nx = n - kh + 1, n - kw + 1
+    if ny <= 0 or nx <= 0:
         return None
-    if occ.any():
-        hits = fftconvolve(occ.astype(np.float32), D[::-1, ::-1].astype(np.float32), "valid")
-        free = hits < 0.5
+    g = W.shape[0]
+    Kh = fft.fft(fft.rfft(sh.K, n=g, axis=1), n=g, axis=0)  # rfft2 of the padded kernel
+    C = fft.irfft2(Wh * Kh.conj(), s=W.shape)[:ny, :nx]
+    free = C < 0.75  # no halo pixel on an occupied one (C = overlap + contact fraction / 2)
+    contact = np.rint(C * 2000.0)  # thousandths
+    if mode == "contact":
+        score = np.where(free, contact, -1.0)
+    elif mode == "grow":
+        reach = np.maximum(np.arange(ny)[:, None] + sh.hr, np.arange(nx)[None, :] + sh.wr)
+        score = np.where(free, contact - np.maximum(reach, side) * 2000.0, -np.inf)
     else:
-        free = np.ones((H - h + 1, W - w + 1), dtype=bool)
-    if not free.any():
-        return None
-    yy, xx = np.nonzero(free)
-    side = np.maximum(np.maximum(yy + box[0], used[0]), np.maximum(xx + box[1], used[1]))
-    key = int(np.argmin((side.astype(np.int64) * H + yy) * W + xx))  # side, then y, then x
-    return int(side[key]), int(yy[key]), int(xx[key])
+        score = free.astype(np.float32) if mode == "down" else free.T.astype(np.float32)
+    while True:
+        j = int(np.argmax(score))  # the first maximum: lowest, then leftmost (or transposed)
+        y, x = divmod(j, nx) if mode != "left" else divmod(j, ny)[::-1]
+        if not free[y, x]:
+            return None
+        if not W[y : y + kh, x : x + kw][sh.halo].any():  # exact check (FFT rounding)
+            grew = max(y + sh.hr, x + sh.wr, side) if mode == "grow" else 0
+            return (-grew, int(contact[y, x]), -(y * n + x)), y, x
+        free[y, x] = False
+        score[(y, x) if mode != "left" else (x, y)] = -np.inf
+
+
+def _place(occ: np.ndarray, side: int, rot: list, pad: int, mode: str = "contact") -> tuple:
+    """Best position of a chart (its shapes ``rot``, one per angle) in the bin of ``side``
+    pixels holding ``occ`` (or, ``mode="grow"``, in a bin grown as little as possible):
+    ``((key, y, x, angle index) or None, work)``; ``mode`` as in :func:`_best`."""
+    # halo frames span [0, n) with the bin at [pad + 1, pad + 1 + side), walls outside
+    b = rot[0].b
+    n = side + (max(max(s.hr, s.wr) for s in rot) if mode == "grow" else 0) + 2 * pad + 2 * b
+    g = fft.next_fast_len(n, real=True)
+    W = np.ones((g, g), dtype=np.float32)
+    W[b : n - b, b : n - b] = 0
+    o = min(side, occ.shape[0])
+    W[pad + b : pad + b + o, pad + b : pad + b + o] = occ[:o, :o]
+    Wh = fft.rfft2(W)
+    best = None
+    for q, sh in enumerate(rot):
+        got = _best(W, Wh, sh, n, mode, side)
+        if got is not None and (best is None or got[0] > best[0]):
+            best = (got[0], got[1], got[2], q)
+    return best, len(rot) * (g * g + _OVERHEAD) + g * g
+
+
+def _stamp(occ: np.ndarray, sh: _Shape, pad: int, y: int, x: int, sign: float) -> None:
+    """Add (``sign`` 1) or remove (-1) a chart's pixels, its pixel ``(pad, pad)`` at ``(y, x)``."""
+    occ[y : y + sh.hr, x : x + sh.wr] += sign * sh.R[pad : pad + sh.hr, pad : pad + sh.wr]
+
+
+def _layout(shapes: list, order: np.ndarray, pad: int, s0: int) -> tuple:
+    """Place charts in ``order`` in a bin of ``s0`` pixels, grown when a chart fits nowhere.
+
+    Returns ``(pos, used, grown, work)``: ``pos[i] = (y, x, angle index)`` of chart ``i``'s
+    corner pixel in the bin, the side of the square the charts' pixels span, whether the bin
+    had to grow, and the grid pixels correlated.
+    """
+    side = s0
+    used = 0
+    occ = np.zeros((s0, s0), dtype=np.float32)
+    pos = [(0, 0, 0)] * len(shapes)
+    work = 0.0
+    for i in order:
+        best, w = _place(occ, side, shapes[i], pad)
+        work += w
+        if best is None:
+            best, w = _place(occ, side, shapes[i], pad, "grow")
+            work += w
+        if best is None:  # cannot happen: the grown bin has room for the chart beside all
+            raise RuntimeError("pack_outlines: internal error, a chart fits nowhere")
+        _, y, x, q = best
+        sh = shapes[i][q]
+        used = max(used, y + sh.hr, x + sh.wr)
+        if used > occ.shape[0]:
+            grown = np.zeros((used, used), dtype=np.float32)
+            grown[: occ.shape[0], : occ.shape[1]] = occ
+            occ = grown
+        side = max(side, used)
+        _stamp(occ, sh, pad, y, x, 1.0)
+        pos[i] = (y, x, q)
+    return pos, used, side > s0, work
+
+
+def _orders(shapes: list) -> list:
+    """Placement orders tried: longest side first, largest area first, longest outline
+    first, then longest side first with sizes jittered (a fixed seed: deterministic)."""
+    px = np.array([s[0].R.sum() for s in shapes])
+    longest = np.array([max(s[0].hr, s[0].wr) for s in shapes])
+    ring = np.array([s[0].ring for s in shapes])
+    out = [np.lexsort((-px, -longest)), np.lexsort((-longest, -px)), np.lexsort((-px, -ring))]
+    rng = np.random.default_rng(0)
+    for _ in range(_JITTERED):
+        j = rng.uniform(1 - _JITTER, 1 + _JITTER, len(shapes))
+        out.append(np.argsort(-longest * j, kind="stable"))
+    return out
 
 
 def pack_outlines(
-    local: list, faces: list, gutter_frac: float, pixels: int | None = None
+    local: list, faces: list, gap: float, pixels: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Place charts by their outlines (see the module docstring).
 
     Parameters
     ----------
     local : list of (n_i, 2) float64
-        Charts in common units, minimum at the origin (rotated as wanted).
+        Charts in common units, minimum at the origin.
     faces : list of (m_i, 3) int64
         Their triangles.
-    gutter_frac : float
-        Gap between charts as a fraction of the atlas side.
+    gap : float
+        Smallest distance between two charts, in the units of ``local``.
     pixels : int, optional
         Raster size (pixels covered by the charts together; default :data:`OUTLINE_PIXELS`).
 
     Returns
     -------
     offsets : (k, 2) float64
-        Translation of every chart after ``turns`` quarter turns about the origin and moving
-        its minimum back to the origin.
-    turns : (k,) int64
-        Quarter turns (counter-clockwise).
+        Translation of every chart after its rotation by ``angles`` about the origin and
+        moving its minimum back to the origin.
+    angles : (k,) float64
+        Rotation of every chart (radians, counter-clockwise).
 
     Examples
     --------
     >>> import numpy as np
     >>> sq = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]]); F = np.array([[0, 1, 2], [0, 2, 3]])
-    >>> off, turns = pack_outlines([sq, sq, sq, sq], [F] * 4, 0.0)
+    >>> off, ang = pack_outlines([sq, sq, sq, sq], [F] * 4, 0.0)
     >>> span = (off + 1).max(axis=0) - off.min(axis=0)
-    >>> bool(np.all(span < 2.1))
-    True
+    >>> bool(np.all(span < 2.1)), ang.shape
+    (True, (4,))
     """
     pixels = OUTLINE_PIXELS if pixels is None else pixels
     area = np.array([np.prod(np.maximum(P.max(axis=0), 1e-300)) for P in local])
     texel = float(np.sqrt(area.sum() / pixels))
-    g = int(np.ceil(gutter_frac * np.sqrt(pixels / 0.6)))
-    pad = g + 1
-    quarter = np.array([[0.0, 1.0], [-1.0, 0.0]])  # P @ quarter turns P by +90 degrees
-    masks = []
-    for P, F in zip(local, faces, strict=True):
-        rot = []
-        Q = P
-        loops = boundary_loops(F)
-        for _ in range(4):
-            Q = Q - Q.min(axis=0)
-            R = rasterize_chart(Q, F, texel, pad, loops)
-            D = ndimage.binary_dilation(R, np.ones((3, 3), bool), iterations=g) if g else R
-            rows, cols = np.nonzero(R)
-            rot.append((R, D, (int(rows.max()) + 1, int(cols.max()) + 1)))
-            Q = Q @ quarter
-        masks.append(rot)
-    side0 = int(np.ceil(np.sqrt(sum(m[0][1].sum() for m in masks) / 0.5)))
-    side0 = max(side0, max(max(m[0][1].shape) for m in masks) + 1)
+    m = round(gap / texel) * _M
+    if m >= 1:  # the gap a whole number of pixels (just under): the halo wastes least
+        texel = gap / m * (1 + 1e-9)
+    big = area >= _BIG_SHARE * area.sum()
+    angles = np.where(big, _ANGLES_BIG, _ANGLES_SMALL)
+    shapes, pad = _shapes(local, faces, texel, gap / texel, angles)
+    px = np.array([s[0].R.sum() for s in shapes])
+    orders = _orders(shapes)
+    lo = max(int(np.sqrt(px.sum())), max(min(max(s.hr, s.wr) for s in r) for r in shapes)) - 1
+    s_try = max(int(np.sqrt(px.sum() / _FIRST_FILL)), lo + 1)
     best = None
-    for order in _orders(masks):
-        got = _layout(masks, order, side0, texel, pad)
-        if best is None or got[2] < best[2]:
-            best = got
-    return best[0], best[1]
-
-
-def _orders(masks: list) -> list:
-    """Placement orders tried: by pixel area, largest first.  (Also trying longest side first
-    changed no fill on iron, fandisk, rocker-arm, abc_00007974_5: not worth its time.)"""
-    area = np.array([m[0][0].sum() for m in masks])
-    return [np.argsort(-area, kind="stable")]
-
-
-def _layout(masks: list, order: np.ndarray, side0: int, texel: float, pad: int):
-    """Place the charts in ``order``; ``(offsets, turns, side in pixels)``."""
-    k = len(masks)
-    while True:
-        occ = np.zeros((side0, side0), dtype=bool)
-        used = (0, 0)
-        offsets = np.zeros((k, 2))
-        turns = np.zeros(k, dtype=np.int64)
-        for i in order:
-            best = None
-            for q, (_R, D, box) in enumerate(masks[i]):
-                got = _place(occ, D, box, used)
-                if got is not None and (best is None or got[0] < best[0][0]):
-                    best = (got, q)
-            if best is None:
+    work = 0.0
+    # the first order: bisection of the bin side between a side that grew and the best one
+    while work < _WORK and (best is None or best[1] - lo > 1):
+        pos, used, grown, w = _layout(shapes, orders[0], pad, s_try)
+        work += w
+        if best is None or used < best[1]:
+            best = (pos, used)
+        if grown:
+            lo = max(lo, s_try)
+        s_try = (lo + best[1]) // 2
+    # the other orders, each as long as it beats the best layout by a pixel
+    for order in orders[1:]:
+        while work < _WORK:
+            pos, used, grown, w = _layout(shapes, order, pad, best[1] - 1)
+            work += w
+            if grown:
                 break
-            (_, y, x), q = best
-            R, _D, box = masks[i][q]
-            occ[y : y + R.shape[0], x : x + R.shape[1]] |= R
-            used = (max(used[0], y + box[0]), max(used[1], x + box[1]))
-            offsets[i] = ((x + pad) * texel, (y + pad) * texel)
-            turns[i] = q
-        else:
-            return offsets, turns, max(used)
-        side0 = int(side0 * 1.3) + 1
+            best = (pos, used)
+    pos = best[0]
+    angles = np.array([shapes[i][q].angle for i, (_, _, q) in enumerate(pos)])
+    offsets = (np.array([(x, y) for y, x, _ in pos], dtype=np.float64) + _SHIFT) * texel
+    return offsets, angles

@@ -303,27 +303,15 @@ def test_stages_by_hand_give_the_pipeline_s_report(can_mesh):
     assert set(res.report) == {"charts", "parameterization", "timings"}
 
 
-def _cap(theta_max, nr=12, nt=32):
-    th = np.linspace(0, theta_max, nr + 1)[1:]
-    ph = np.linspace(0, 2 * np.pi, nt, endpoint=False)
-    T, P = np.meshgrid(th, ph, indexing="ij")
-    ring = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
-    V = np.r_[[[0.0, 0.0, 1.0]], ring]
-    F = [[0, 1 + j, 1 + (j + 1) % nt] for j in range(nt)]
-    for i in range(nr - 1):
-        for j in range(nt):
-            a, b = 1 + i * nt + j, 1 + i * nt + (j + 1) % nt
-            F += [[a, a + nt, b + nt], [a, b + nt, b]]
-    return V, np.array(F)
-
-
 def test_mesh_mean_energy_is_brought_under_its_bound(monkeypatch):
     """A single chart below the per-chart split threshold (5) but above the per-mesh bound
     (4.3) is split by the mesh-level pass, so the mesh's mean energy meets the bound."""
+    from test_param import sphere_cap
+
     import igl_heatseg.pipeline.stages as stages
     from igl_heatseg.parameterization.split import MESH_SD_MAX, SPLIT_SD_MAX
 
-    V, F = _cap(1.9)  # most of a hemisphere and a bit more: one chart of energy ~4.3-5
+    V, F = sphere_cap(1.9)  # most of a hemisphere and a bit more: one chart of energy ~4.3-5
     mesh = validate_mesh(V, F)
 
     def mapped():

@@ -466,13 +466,17 @@ def parameterize_charts(
     return out, sum(d for *_, d, _ in done), sum(p for *_, p in done)
 
 
-def _excess(pieces: list) -> float:
-    """Area times symmetric Dirichlet energy above :data:`MESH_SD_MAX`, summed over pieces."""
-    return sum(
-        c.area * max(c.param.distortion.get("sym_dirichlet", np.inf) - MESH_SD_MAX, 0.0)
-        for c in pieces
-        if c.param is not None and c.param.bijective
-    )
+def _excess(pieces: list, signed: bool = False) -> float:
+    """Area times symmetric Dirichlet energy above :data:`MESH_SD_MAX`, summed over the
+    mapped pieces (``signed``: below it counts negatively, as in the mesh's mean)."""
+    total = 0.0
+    for c in pieces:
+        if c.param is None or not c.param.bijective:
+            continue
+        d = c.param.distortion.get("sym_dirichlet", np.inf) - MESH_SD_MAX
+        if np.isfinite(d):
+            total += c.area * (d if signed else max(d, 0.0))
+    return total
 
 
 def _lower_mesh_energy(done: list, mesh: CleanMesh, areas: np.ndarray, opts: dict) -> None:
@@ -497,8 +501,8 @@ def _lower_mesh_energy(done: list, mesh: CleanMesh, areas: np.ndarray, opts: dic
         again = map_chart(replace(orig), mesh, areas, split_sd_max=MESH_SD_MAX, **opts)
         new = _excess(again[0])
         if new < old and all(c.param is not None and c.param.bijective for c in again[0]):
+            excess += _excess(again[0], signed=True) - _excess(pieces, signed=True)
             done[i] = (orig, *again)
-            excess -= old - new
             log.info("chart %d mapped again for the mesh's mean energy: excess %.3g -> %.3g "
                      "(%d piece(s))", orig.id, old / total, new / total, len(again[0]))
 

@@ -138,9 +138,11 @@ def run_pipeline(
     --------
     >>> import igl, igl_heatseg as ih
     >>> V, F = igl.icosahedron()
-    >>> res = ih.run(ih.validate_mesh(*igl.loop(V, F, 2)))
+    >>> res = ih.run(ih.validate_mesh(*igl.loop(V, F, 2)))  # a sphere: one segment, cut open
     >>> res.report["parameterization"]["charts_bijective"], res.segmentation.num_segments
-    (1, 1)
+    (2, 1)
+    >>> res.report["parameterization"]["charts_cut_for_distortion"]  # its mean energy was > 4.3
+    1
     """
     if isinstance(hlle_skip_curvature, str) and hlle_skip_curvature == "default":
         hlle_skip_curvature = HLLE_SKIP_CURVATURE

@@ -295,11 +295,20 @@ def l_chart(n=6, size=1.0):
 
 
 def inside(poly, p):
-    """Even-odd point-in-polygon test."""
-    a, b = poly, np.roll(poly, -1, axis=0)
+    """Even-odd point-in-polygon test; ``poly`` (n, 2) or a list of loops (holes)."""
+    loops = poly if isinstance(poly, list) else [poly]
+    a = np.concatenate(loops)
+    b = np.concatenate([np.roll(lp, -1, axis=0) for lp in loops])
     cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
     x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
     return bool(np.count_nonzero(cross & (x > p[0])) % 2)
+
+
+def boundary_edges(F):
+    """Boundary edges (e, 2) of a chart over all its loops (a chart may have holes)."""
+    from igl_heatseg.mesh.topology import boundary_loops
+
+    return np.concatenate([np.c_[lp, np.roll(lp, -1)] for lp in boundary_loops(F)])
 
 
 def charts_overlap(uvs, faces):
@@ -307,19 +316,44 @@ def charts_overlap(uvs, faces):
     from igl_heatseg.mesh.topology import boundary_loops
     from igl_heatseg.parameterization.bijectivity import boundary_self_intersections
 
-    loops = [boundary_loops(F)[0] for F in faces]
     P = np.concatenate(uvs)
     off = np.cumsum([0] + [len(U) for U in uvs])
-    E = np.concatenate([np.c_[lp, np.roll(lp, -1)] + o for lp, o in zip(loops, off, strict=False)])
+    E = np.concatenate([boundary_edges(F) + o for F, o in zip(faces, off, strict=False)])
     pairs, _ = boundary_self_intersections(P, E)
     chart = np.searchsorted(off, E[:, 0], side="right") - 1
     if (chart[pairs[:, 0]] != chart[pairs[:, 1]]).any():
         return True
-    for i, (U, lp) in enumerate(zip(uvs, loops, strict=True)):
+    for i, (U, F) in enumerate(zip(uvs, faces, strict=True)):
+        loops = [U[lp] for lp in boundary_loops(F)]
         for j, W in enumerate(uvs):
-            if i != j and inside(U[lp], W[faces[j][0]].mean(axis=0)):  # a point of chart j
+            if i != j and inside(loops, W[faces[j][0]].mean(axis=0)):  # a point of chart j
                 return True
     return False
+
+
+def _point_segment(P, S0, S1):
+    """(n, m) distances from points P (n, 2) to segments S0 S1 (m, 2)."""
+    d = S1 - S0
+    t = ((P[:, None] - S0[None]) * d[None]).sum(-1) / np.maximum((d * d).sum(-1), 1e-300)
+    foot = S0[None] + np.clip(t, 0.0, 1.0)[..., None] * d[None]
+    return np.linalg.norm(P[:, None] - foot, axis=-1)
+
+
+def min_chart_gap(uvs, faces):
+    """Smallest distance between the boundaries of two different charts (exact for
+    boundaries that do not cross: the minimum over endpoint-to-segment distances)."""
+    best = np.inf
+    edges = [boundary_edges(F) for F in faces]
+    for i in range(len(uvs)):
+        A0, A1 = uvs[i][edges[i][:, 0]], uvs[i][edges[i][:, 1]]
+        for j in range(i + 1, len(uvs)):
+            B0, B1 = uvs[j][edges[j][:, 0]], uvs[j][edges[j][:, 1]]
+            best = min(
+                best,
+                _point_segment(A0, B0, B1).min(),
+                _point_segment(B0, A0, A1).min(),
+            )
+    return best
 
 
 @pytest.mark.parametrize("k", [2, 5, 12])
@@ -391,6 +425,167 @@ def test_outline_packing_keeps_the_gutter_along_boundaries(k):
     for Q, F in zip(atlas.uvs, faces, strict=True):
         lp = boundary_loops(F)[0]
         pts.append((Q[lp][None] * (1 - s) + Q[np.roll(lp, -1)][None] * s).reshape(-1, 2))
-    closest = min(cKDTree(pts[i]).query(pts[j])[0].min()
-                  for i in range(k) for j in range(i + 1, k))
+    closest = min(cKDTree(pts[i]).query(pts[j])[0].min() for i in range(k) for j in range(i + 1, k))
     assert closest >= atlas.gutter * (1 - 1e-6)
+
+
+def sub_chart(P, F, keep):
+    """The chart of the faces ``keep`` of ``(P, F)``, vertices renumbered."""
+    F = F[keep]
+    used = np.unique(F)
+    remap = np.full(len(P), -1)
+    remap[used] = np.arange(len(used))
+    return P[used], remap[F]
+
+
+def triangle_chart(n=4, size=1.0):
+    """A right isosceles triangle (legs ``size``) as a grid chart."""
+    P, F = grid_chart(n, n, size, size)
+    return sub_chart(P, F, P[F].mean(axis=1).sum(axis=1) < size)
+
+
+def ring_chart(n=10, hole=(2, 8)):
+    """An ``n`` x ``n`` square chart with a square hole (two boundary loops)."""
+    P, F = grid_chart(n, n, float(n), float(n))
+    c = P[F].mean(axis=1)
+    return sub_chart(P, F, ~((c > hole[0]) & (c < hole[1])).all(axis=1))
+
+
+def rotate(P, t):
+    return P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]])
+
+
+def mixed_charts(seed):
+    """L shapes, triangles, thin strips and rectangles at random rotations and offsets."""
+    rng = np.random.default_rng(seed)
+    uvs, faces = [], []
+    for k in range(12):
+        kind = k % 4
+        if kind == 0:
+            P, F = l_chart(size=rng.uniform(0.3, 1.0))
+        elif kind == 1:
+            P, F = triangle_chart(size=rng.uniform(0.5, 1.5))
+        elif kind == 2:
+            P, F = grid_chart(8, 1, rng.uniform(1.0, 3.0), rng.uniform(0.05, 0.2))
+        else:
+            P, F = grid_chart(2, 3, rng.uniform(0.3, 1.0), rng.uniform(0.3, 1.0))
+        uvs.append(rotate(P, rng.uniform(-np.pi, np.pi)) + rng.uniform(-5, 5, 2))
+        faces.append(F)
+    return uvs, faces, rng.uniform(0.5, 2.0, len(uvs))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("packer", ["outlines", "auto"])
+def test_packing_mixed_shapes_is_a_rotation_with_one_scale_and_keeps_the_gutter(seed, packer):
+    """Every chart is rotated (the reported angle, never mirrored), scaled by one factor
+    times its own area factor, lies in the unit square, overlaps no other chart, and the
+    exact distance between the boundaries of any two charts is at least the gutter."""
+    uvs, faces, areas = mixed_charts(seed)
+    atlas = pack_charts(uvs, faces, areas=areas, packer=packer, gutter=0.01)
+    assert not charts_overlap(atlas.uvs, faces)
+    assert min_chart_gap(atlas.uvs, faces) >= atlas.gutter * (1 - 1e-9)
+    assert atlas.gutter > 0.005
+    for i, (P, F, Q) in enumerate(zip(uvs, faces, atlas.uvs, strict=True)):
+        assert Q.min() >= 0.0 and Q.max() <= 1.0
+        assert np.all(np.sign(signed_areas(Q, F)) == np.sign(signed_areas(P, F)))
+        # edge vectors: Q = s R(angle) P + t with s = scale * chart scale
+        s = atlas.scale * atlas.chart_scales[i]
+        np.testing.assert_allclose(
+            (Q[F[:, 1]] - Q[F[:, 0]]),
+            s * rotate(P[F[:, 1]] - P[F[:, 0]], atlas.rotations[i]),
+            atol=1e-12,
+        )
+    # the chart scales make UV areas proportional to the given areas
+    a = np.array([abs(signed_areas(Q, F).sum()) for Q, F in zip(atlas.uvs, faces, strict=True)])
+    np.testing.assert_allclose(a / a.sum(), areas / areas.sum(), rtol=1e-9)
+
+
+def test_outline_packing_is_deterministic():
+    uvs, faces, areas = mixed_charts(3)
+    a = pack_charts(uvs, faces, areas=areas, packer="outlines")
+    b = pack_charts(uvs, faces, areas=areas, packer="outlines")
+    for Qa, Qb in zip(a.uvs, b.uvs, strict=True):
+        np.testing.assert_array_equal(Qa, Qb)
+
+
+def test_outline_packing_fills_with_triangle_pairs_and_l_rectangle_mixes():
+    """Eight equal right triangles pair into squares, four L shapes and four 3 x 1
+    rectangles into rectangles: fill >= 0.85 (the quarter-turn outline packer: .66, .65)."""
+    T, Ft = triangle_chart()
+    atlas = pack_charts([T] * 8, [Ft] * 8)
+    assert atlas.fill >= 0.85
+    assert not charts_overlap(atlas.uvs, [Ft] * 8)
+    L, Fl = l_chart()
+    R, Fr = grid_chart(3, 1, 3.0, 1.0)
+    atlas = pack_charts([L] * 4 + [R] * 4, [Fl] * 4 + [Fr] * 4)
+    assert atlas.fill >= 0.85
+    assert not charts_overlap(atlas.uvs, [Fl] * 4 + [Fr] * 4)
+
+
+def test_outline_packing_turns_a_long_strip_to_the_diagonal():
+    """A 10 x 0.6 strip with eight unit squares: only a strip along the diagonal keeps the
+    square small (fill >= 0.22; quarter turns only: .14)."""
+    strip, Fs = grid_chart(20, 1, 10.0, 0.6)
+    sq, Fq = grid_chart(2, 2)
+    atlas = pack_charts([strip] + [sq] * 8, [Fs] + [Fq] * 8)
+    assert atlas.fill >= 0.22
+    assert abs(np.sin(2 * atlas.rotations[0])) > 0.5  # far from a quarter turn
+    assert not charts_overlap(atlas.uvs, [Fs] + [Fq] * 8)
+
+
+def test_outline_packing_nests_a_chart_in_a_hole():
+    """A 3 x 3 square goes into the 6 x 6 hole of a 10 x 10 ring chart."""
+    ring, Fr = ring_chart()
+    sq, Fq = grid_chart(3, 3, 3.0, 3.0)
+    atlas = pack_charts([ring, sq], [Fr, Fq], packer="outlines")
+    box = atlas.boxes
+    assert np.all(box[1, :2] > box[0, :2]) and np.all(box[1, 2:] < box[0, 2:])
+    assert not charts_overlap(atlas.uvs, [Fr, Fq])
+    assert min_chart_gap(atlas.uvs, [Fr, Fq]) >= atlas.gutter * (1 - 1e-9)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_rasterize_chart_is_conservative_and_tight(seed):
+    """Every point of the chart (sampled in its triangles and on its boundary) falls in a
+    marked pixel, and every marked pixel lies within a pixel diagonal of the chart: at most
+    area + sqrt(2) * perimeter + 2 pi pixels."""
+    from igl_heatseg.parameterization.outline_pack import rasterize_chart
+
+    rng = np.random.default_rng(seed)
+    for P, F in [
+        l_chart(size=rng.uniform(3, 9)),
+        triangle_chart(size=rng.uniform(3, 9)),
+        ring_chart(),
+        grid_chart(5, 1, rng.uniform(5, 20), rng.uniform(0.2, 1)),
+    ]:
+        P = rotate(P, rng.uniform(-np.pi, np.pi))
+        P = P - P.min(axis=0) + rng.uniform(0, 1, 2)  # not on the pixel grid
+        pad = 2
+        M = rasterize_chart(P, F, 1.0, pad)
+        u = rng.random((len(F), 30, 2))
+        u[u.sum(-1) > 1] = 1 - u[u.sum(-1) > 1]
+        T = P[F]
+        S = T[:, None, 0] + u[..., :1] * (T[:, None, 1] - T[:, None, 0])
+        S = S + u[..., 1:] * (T[:, None, 2] - T[:, None, 0])
+        E = boundary_edges(F)
+        t = rng.random((len(E), 1))
+        S = np.concatenate([S.reshape(-1, 2), P[E[:, 0]] * (1 - t) + P[E[:, 1]] * t, P])
+        assert M[np.floor(S[:, 1]).astype(int) + pad, np.floor(S[:, 0]).astype(int) + pad].all()
+        area = abs(signed_areas(P, F).sum())
+        perimeter = np.linalg.norm(P[E[:, 1]] - P[E[:, 0]], axis=1).sum()
+        assert M.sum() <= area + np.sqrt(2) * perimeter + 2 * np.pi
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.5, 1.0, 1.3, 2.0, 2.9])
+def test_gutter_structure_holds_the_pixels_closer_than_the_gap(gap):
+    from igl_heatseg.parameterization.outline_pack import gutter_structure
+
+    S = gutter_structure(gap)
+    r = S.shape[0] // 2
+    big = r + 3
+    d = np.maximum(np.abs(np.arange(-big, big + 1)) - 1, 0)
+    want = np.hypot(d[:, None], d[None, :]) < gap  # distance between the pixel squares
+    want[big, big] = True
+    got = np.zeros_like(want)
+    got[big - r : big + r + 1, big - r : big + r + 1] = S
+    np.testing.assert_array_equal(got, want)

@@ -2,14 +2,17 @@
 
 Every chart map is assumed bijective already (see :mod:`~.bijectivity`); packing only moves
 charts rigidly (rotation + translation) and scales all of them by one common factor, so
-each chart keeps its orientation and its map stays bijective, and charts do not overlap each
-other because their (gutter-padded) bounding boxes do not.
+each chart keeps its orientation and its map stays bijective; charts do not overlap and stay
+at least the gutter apart (their gutter-padded bounding boxes with the box packers, their
+outlines with :func:`~.outline_pack.pack_outlines`).
 
 Packing: optional per-chart rescale so that UV area equals 3D area (charts from different
 methods may come in different units), rotation of each chart to its minimum-area bounding
-rectangle (rotating calipers on the convex hull, then "landscape"), and shelf packing of the
-boxes sorted by height, trying several shelf widths and keeping the squarest layout.  The
-result is normalised into ``[0, 1]^2`` with the common scale.
+rectangle (rotating calipers on the convex hull, then "landscape"), then shelf and skyline
+packing of the boxes (several bin widths, the squarest layout kept) and, up to
+:data:`~.outline_pack.OUTLINE_MAX_CHARTS` charts, packing of the charts' own outlines at any
+of several rotations; the smaller square wins.  The result is normalised into ``[0, 1]^2``
+with the common scale.
 
 OBJ conventions: indices are 1-based; ``f v/vt v/vt v/vt``; coordinates written with 17
 significant digits so that a re-read file gives back the same doubles.
@@ -76,7 +79,7 @@ class PackedAtlas:
     rotations : (k,) float64
         Rotation applied to each chart (radians, counter-clockwise).
     gutter : float
-        Gap between boxes in atlas units.
+        Smallest gap between two charts (box packers: between their boxes) in atlas units.
     fill : float
         Sum of chart UV areas in the atlas (how much of the unit square is used).
     """
@@ -324,15 +327,18 @@ def pack_charts(
         equals its 3D area, so relative sizes in the atlas follow the surface.  Otherwise the
         charts' own UV units are kept (one common factor for all).
     gutter : float
-        Gap between chart boxes as a fraction of the atlas side, ``0 <= gutter < 0.5``.
+        Gap between charts as a fraction of the side of a square as large as the charts'
+        bounding boxes together (the atlas is larger: :attr:`PackedAtlas.gutter` is the gap in
+        atlas units), ``0 <= gutter < 0.5``.
     rotate : bool
         Rotate each chart to its minimum-area bounding box.
     packer : {"auto", "boxes", "outlines"}
         ``"boxes"``: shelf and skyline packing of the bounding boxes (boxes at least the gutter
-        apart); ``"outlines"``: the charts' own outlines on a raster
-        (:func:`~.outline_pack.pack_outlines`: charts at least the gutter apart, their boxes
-        may overlap); ``"auto"`` (default): the smaller of the two layouts (outlines only up to
-        :data:`~.outline_pack.OUTLINE_MAX_CHARTS` charts).
+        apart, charts turned by quarter turns); ``"outlines"``: the charts' own outlines on a
+        raster (:func:`~.outline_pack.pack_outlines`: charts at least the gutter apart, turned
+        by any of 4 or 8 angles, their boxes may overlap); ``"auto"`` (default): the smaller
+        of the two layouts (outlines only up to :data:`~.outline_pack.OUTLINE_MAX_CHARTS`
+        charts).
 
     Returns
     -------

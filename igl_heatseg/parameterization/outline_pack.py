@@ -4,19 +4,22 @@ Every chart map is bijective, so its image is the polygon bounded by the image o
 loops.  Each chart (scaled to the common texel density) is rasterised *exactly
 conservatively* at several rotation angles: the pixels that meet the closed polygon (pixel
 centres inside it, plus every pixel a boundary edge passes through).  The pixels closer than
-the gutter to a chart's pixels form its *halo*; two charts are apart by at least the gutter
-when neither's pixels meet the other's halo.
+the gap to a chart's pixels form its *halo*; two charts are at least the gap apart when
+neither's pixels meet the other's halo.  The texel is set so that the gap is just under a
+whole number of pixels (one, by default): the halo then wastes least.
 
-Charts are placed one by one (longest side or largest area first) in a square *bin* of
-``s`` pixels: among the positions where the chart's halo meets no placed chart and stays
-inside the bin, the one whose outline touches the most placed charts or bin walls (the
-"contact" of the pixel ring around the halo, as a fraction of that ring), then the lowest,
-then the leftmost; over all its angles.  Collisions and contact for every position at once
-come from one FFT correlation of the occupancy grid with ``M * halo + ring``
-(``M`` = ring size + 1).  A chart that fits nowhere grows the bin as little as possible.
-Several layouts (chart orders, starting bin sizes) are tried and the smallest kept.
+Charts are placed one by one in a square *bin* of ``s`` pixels: among the positions where
+the chart's halo meets no placed chart and stays inside the bin, the one with the largest
+*contact* (the fraction of a ring of pixels around the halo, about a quarter of the chart's
+size wide, on placed charts or the bin walls), then the lowest, then the leftmost; over all
+its angles (8 for large or long charts, 4 for the others).  Collision and contact at every
+position come from one FFT correlation of the occupancy grid with
+``halo + ring / (2 * ring size)``, each chosen position checked exactly.  A chart that fits
+nowhere grows the bin as little as possible.  The bin side is bisected for one chart order
+(longest side first), then other orders try to beat the best layout by a pixel, within a
+fixed amount of work (deterministic: no clock); the smallest layout is kept.
 
-Charts are thus at least the gutter apart and never overlap (although their bounding boxes
+Charts are thus at least the gap apart and never overlap (although their bounding boxes
 may), every chart is only rotated (orientation kept) and translated.
 """
 
@@ -35,25 +38,33 @@ __all__ = [
     "OUTLINE_MAX_CHARTS",
 ]
 
-#: Pixels covered by all charts together (sets the texel size of the raster).
+#: Pixels covered by the charts' boxes together (sets the texel size of the raster; with
+#: the default gutter the gap is then about one pixel, see :func:`pack_outlines`).
 OUTLINE_PIXELS: int = 60_000
 
 #: Outline packing is used up to this many charts.
-OUTLINE_MAX_CHARTS: int = 300
+OUTLINE_MAX_CHARTS: int = 500
 
-#: Rotations tried for the charts holding at least :data:`_BIG_SHARE` of the total area, and
-#: for the others (evenly spaced over a full turn, starting at the minimum-area rectangle).
+#: Rotations tried (evenly spaced over a full turn, from the minimum-area rectangle) for the
+#: charts holding at least :data:`_BIG_SHARE` of the area or longer than :data:`_LONG` times
+#: the square root of the total box area (a long strip may need a diagonal), and for the rest.
 _ANGLES_BIG, _ANGLES_SMALL = 8, 4
 _BIG_SHARE = 0.02
+_LONG = 0.3
 
-#: Work allowed for all layouts together, in correlated pixels (grid pixels summed over
-#: every chart angle tried), and the first bin tried as a fill of the chart pixels.
+#: Work allowed for all layouts together: pixels of the grids correlated, plus
+#: :data:`_OVERHEAD` per correlation (its fixed cost); about 1 s on the reference machine.
 _WORK = 3e8
 _OVERHEAD = 8000
+
+#: The first bin tried, as a fill of the chart pixels.
 _FIRST_FILL = 0.8
-_RING = 8
-_RING_F = 0.25
-_M = 1
+
+#: Width of the contact ring around a chart's halo, per square root of its pixel count.
+_RING = 0.25
+
+#: Orders tried after the three sorted ones: longest side first, each side scaled by a
+#: random factor in ``1 +- _JITTER`` (fixed seed).
 _JITTERED = 20
 _JITTER = 0.2
 
@@ -185,17 +196,21 @@ def gutter_structure(gap: float) -> np.ndarray:
 
 
 class _Shape:
-    """One chart at one angle: its pixels ``R`` (``pad`` empty pixels around), the
-    correlation kernel ``K = M * halo + ring`` (one more pixel around), its extent in
-    pixels ``hr, wr`` from the chart's corner pixel ``(pad, pad)``."""
+    """One chart at one angle.
+
+    ``R``: its pixels, ``pad`` empty pixels around (the chart's corner at pixel
+    ``(pad, pad)``); ``hr, wr``: its extent in pixels from there.  ``halo``: the pixels closer
+    than the gap to ``R``, ``b`` more empty pixels around; ``ring``: the pixels of the frame
+    within ``b`` of the halo (Chebyshev), counted.  ``K = halo + ring / (2 * ring count)``:
+    correlated with the occupancy, it gives ``overlap + contact / 2`` at every position
+    (contact: the fraction of the ring on occupied pixels or walls, in ``[0, 1]``).
+    """
 
     __slots__ = ("R", "K", "halo", "ring", "hr", "wr", "angle", "b")
 
-    def __init__(self, R: np.ndarray, halo: np.ndarray, pad: int, angle: float, r: int):
-        self.b = r
-        Dp = np.pad(halo, r)
-        box = np.ones((2 * r + 1, 2 * r + 1), dtype=bool)
-        ring = (ndimage.binary_dilation(Dp, box) & ~Dp).astype(np.float32)
+    def __init__(self, R: np.ndarray, halo: np.ndarray, pad: int, angle: float, b: int):
+        Dp = np.pad(halo, b)
+        ring = ndimage.maximum_filter(Dp, size=2 * b + 1) & ~Dp  # separable box dilation
         self.R = R
         self.ring = int(ring.sum())
         self.K = (Dp + ring * (0.5 / max(self.ring, 1))).astype(np.float32)
@@ -204,6 +219,7 @@ class _Shape:
         self.hr = int(rows.max()) + 1 - pad
         self.wr = int(cols.max()) + 1 - pad
         self.angle = angle
+        self.b = b
 
 
 def _rotate(P: np.ndarray, t: float) -> np.ndarray:
@@ -218,62 +234,58 @@ def _shapes(local: list, faces: list, texel: float, gap: float, n_angles: list) 
     out = []
     for P, F, na in zip(local, faces, n_angles, strict=True):
         loops = boundary_loops(F)
-        rot = []
-        r = 0
+        rot: list = []
         for t in np.arange(na) * (2 * np.pi / na):
             Q = _rotate(P, t) if t else P
             R = rasterize_chart(Q - Q.min(axis=0) + _SHIFT * texel, F, texel, pad, loops)
-            if not r:
-                r = _RING if _RING_F <= 0 else \
-                    int(np.clip(round(_RING_F * np.sqrt(R.sum())), 2, 16))
-            rot.append(_Shape(R, ndimage.binary_dilation(R, S) if pad else R, pad, float(t), r))
+            # one ring width for all angles of a chart (its frame in the grid)
+            b = rot[0].b if rot else int(np.clip(round(_RING * np.sqrt(R.sum())), 2, 16))
+            rot.append(_Shape(R, ndimage.binary_dilation(R, S) if pad else R, pad, float(t), b))
         out.append(rot)
     return out, pad
 
 
-def _best(W: np.ndarray, Wh: np.ndarray, sh: _Shape, n: int, mode: str, side: int):
-    """Best position of shape ``sh`` on the grid ``W`` (spectrum ``Wh``) where the halo's
-    frame spans ``n`` pixels: ``(key, y, x)`` or ``None``; the larger key is better.
-
-    ``mode``: ``"contact"``: the contact fraction in thousandths, then the lowest, then the
-    leftmost position; ``"grow"``: the smallest bin side reached (from ``side``) first, then
-    as ``"contact"``; ``"down"`` / ``"left"``: the lowest / leftmost position.
-    """
+def _best(W: np.ndarray, Wh: np.ndarray, sh: _Shape, n: int, side: int | None):
+    """Best position of shape ``sh`` on the grid ``W`` (spectrum ``Wh``) where the kernel's
+    frame spans ``n`` pixels: ``(key, y, x)`` or ``None``; the larger key is better: the
+    contact in thousandths, then the lowest, then the leftmost position; when growing
+    (``side`` = current bin side) the smallest bin side reached comes first."""
     kh, kw = sh.K.shape
     ny, nx = n - kh + 1, n - kw + 1
     if ny <= 0 or nx <= 0:
         return None
     g = W.shape[0]
-    Kh = fft.fft(fft.rfft(sh.K, n=g, axis=1), n=g, axis=0)  # rfft2 of the padded kernel
-    C = fft.irfft2(Wh * Kh.conj(), s=W.shape)[:ny, :nx]
-    free = C < 0.75  # no halo pixel on an occupied one (C = overlap + contact fraction / 2)
-    contact = np.rint(C * 2000.0)  # thousandths
-    if mode == "contact":
+    # correlation = convolution with the flipped kernel (rfft2 of the padded kernel, whose
+    # rows past kh are zero: one transform along x on kh rows, then along y)
+    P = fft.fft(fft.rfft(sh.K[::-1, ::-1], n=g, axis=1), n=g, axis=0)
+    P *= Wh
+    C = fft.irfft2(P, s=W.shape)[kh - 1 : kh - 1 + ny, kw - 1 : kw - 1 + nx]
+    C *= 2000.0  # 2000 * overlap + contact in thousandths
+    free = C < 1500.0  # no halo pixel on an occupied one (FFT rounding is ~1e-2 at most)
+    contact = np.rint(C, out=C)
+    if side is None:
         score = np.where(free, contact, -1.0)
-    elif mode == "grow":
+    else:
         reach = np.maximum(np.arange(ny)[:, None] + sh.hr, np.arange(nx)[None, :] + sh.wr)
         score = np.where(free, contact - np.maximum(reach, side) * 2000.0, -np.inf)
-    else:
-        score = free.astype(np.float32) if mode == "down" else free.T.astype(np.float32)
     while True:
-        j = int(np.argmax(score))  # the first maximum: lowest, then leftmost (or transposed)
-        y, x = divmod(j, nx) if mode != "left" else divmod(j, ny)[::-1]
+        y, x = divmod(int(np.argmax(score)), nx)  # the first maximum: lowest, then leftmost
         if not free[y, x]:
             return None
         if not W[y : y + kh, x : x + kw][sh.halo].any():  # exact check (FFT rounding)
-            grew = max(y + sh.hr, x + sh.wr, side) if mode == "grow" else 0
+            grew = 0 if side is None else max(y + sh.hr, x + sh.wr, side)
             return (-grew, int(contact[y, x]), -(y * n + x)), y, x
         free[y, x] = False
-        score[(y, x) if mode != "left" else (x, y)] = -np.inf
+        score[y, x] = -np.inf
 
 
-def _place(occ: np.ndarray, side: int, rot: list, pad: int, mode: str = "contact") -> tuple:
+def _place(occ: np.ndarray, side: int, rot: list, pad: int, grow: bool = False) -> tuple:
     """Best position of a chart (its shapes ``rot``, one per angle) in the bin of ``side``
-    pixels holding ``occ`` (or, ``mode="grow"``, in a bin grown as little as possible):
-    ``((key, y, x, angle index) or None, work)``; ``mode`` as in :func:`_best`."""
-    # halo frames span [0, n) with the bin at [pad + 1, pad + 1 + side), walls outside
+    pixels holding ``occ`` (or, ``grow``, in a bin grown as little as possible):
+    ``((key, y, x, angle index) or None, work)``."""
+    # kernel frames span [0, n): the bin at [b + pad, b + pad + side), walls outside [b, n - b)
     b = rot[0].b
-    n = side + (max(max(s.hr, s.wr) for s in rot) if mode == "grow" else 0) + 2 * pad + 2 * b
+    n = side + (max(max(s.hr, s.wr) for s in rot) if grow else 0) + 2 * pad + 2 * b
     g = fft.next_fast_len(n, real=True)
     W = np.ones((g, g), dtype=np.float32)
     W[b : n - b, b : n - b] = 0
@@ -282,15 +294,15 @@ def _place(occ: np.ndarray, side: int, rot: list, pad: int, mode: str = "contact
     Wh = fft.rfft2(W)
     best = None
     for q, sh in enumerate(rot):
-        got = _best(W, Wh, sh, n, mode, side)
+        got = _best(W, Wh, sh, n, side if grow else None)
         if got is not None and (best is None or got[0] > best[0]):
             best = (got[0], got[1], got[2], q)
     return best, len(rot) * (g * g + _OVERHEAD) + g * g
 
 
-def _stamp(occ: np.ndarray, sh: _Shape, pad: int, y: int, x: int, sign: float) -> None:
-    """Add (``sign`` 1) or remove (-1) a chart's pixels, its pixel ``(pad, pad)`` at ``(y, x)``."""
-    occ[y : y + sh.hr, x : x + sh.wr] += sign * sh.R[pad : pad + sh.hr, pad : pad + sh.wr]
+def _stamp(occ: np.ndarray, sh: _Shape, pad: int, y: int, x: int) -> None:
+    """Add a chart's pixels to ``occ``, its corner pixel ``(pad, pad)`` at ``(y, x)``."""
+    occ[y : y + sh.hr, x : x + sh.wr] += sh.R[pad : pad + sh.hr, pad : pad + sh.wr]
 
 
 def _layout(shapes: list, order: np.ndarray, pad: int, s0: int) -> tuple:
@@ -309,7 +321,7 @@ def _layout(shapes: list, order: np.ndarray, pad: int, s0: int) -> tuple:
         best, w = _place(occ, side, shapes[i], pad)
         work += w
         if best is None:
-            best, w = _place(occ, side, shapes[i], pad, "grow")
+            best, w = _place(occ, side, shapes[i], pad, grow=True)
             work += w
         if best is None:  # cannot happen: the grown bin has room for the chart beside all
             raise RuntimeError("pack_outlines: internal error, a chart fits nowhere")
@@ -321,7 +333,7 @@ def _layout(shapes: list, order: np.ndarray, pad: int, s0: int) -> tuple:
             grown[: occ.shape[0], : occ.shape[1]] = occ
             occ = grown
         side = max(side, used)
-        _stamp(occ, sh, pad, y, x, 1.0)
+        _stamp(occ, sh, pad, y, x)
         pos[i] = (y, x, q)
     return pos, used, side > s0, work
 
@@ -337,7 +349,12 @@ def _orders(shapes: list) -> list:
     for _ in range(_JITTERED):
         j = rng.uniform(1 - _JITTER, 1 + _JITTER, len(shapes))
         out.append(np.argsort(-longest * j, kind="stable"))
-    return out
+    unique, seen = [], set()
+    for o in out:  # few charts: many repeats
+        if o.tobytes() not in seen:
+            seen.add(o.tobytes())
+            unique.append(o)
+    return unique
 
 
 def pack_outlines(
@@ -354,7 +371,9 @@ def pack_outlines(
     gap : float
         Smallest distance between two charts, in the units of ``local``.
     pixels : int, optional
-        Raster size (pixels covered by the charts together; default :data:`OUTLINE_PIXELS`).
+        Raster size: pixels covered by the charts' boxes together (default
+        :data:`OUTLINE_PIXELS`), before the texel is adjusted to make the gap a whole number
+        of pixels.
 
     Returns
     -------
@@ -376,10 +395,11 @@ def pack_outlines(
     pixels = OUTLINE_PIXELS if pixels is None else pixels
     area = np.array([np.prod(np.maximum(P.max(axis=0), 1e-300)) for P in local])
     texel = float(np.sqrt(area.sum() / pixels))
-    m = round(gap / texel) * _M
-    if m >= 1:  # the gap a whole number of pixels (just under): the halo wastes least
-        texel = gap / m * (1 + 1e-9)
-    big = area >= _BIG_SHARE * area.sum()
+    m = round(gap / texel)
+    if m >= 1 and gap / m > 0.7 * texel:  # the gap a whole number of pixels (just under):
+        texel = gap / m * (1 + 1e-9)  # the halo wastes least (at most twice the pixels)
+    longest = np.array([P.max() for P in local])
+    big = (area >= _BIG_SHARE * area.sum()) | (longest >= _LONG * np.sqrt(area.sum()))
     angles = np.where(big, _ANGLES_BIG, _ANGLES_SMALL)
     shapes, pad = _shapes(local, faces, texel, gap / texel, angles)
     px = np.array([s[0].R.sum() for s in shapes])

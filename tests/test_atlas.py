@@ -356,15 +356,21 @@ def min_chart_gap(uvs, faces):
     return best
 
 
-@pytest.mark.parametrize("k", [2, 5, 12])
-def test_outline_packing_nests_charts_without_overlap(k):
-    rng = np.random.default_rng(k)
+def random_l_charts(k, seed):
+    """k L-shaped charts of random size (0.3-1) and rotation."""
+    rng = np.random.default_rng(seed)
     uvs, faces = [], []
     for _ in range(k):
         P, F = l_chart(size=rng.uniform(0.3, 1.0))
         t = rng.uniform(-np.pi, np.pi)
         uvs.append(P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]]))
         faces.append(F)
+    return uvs, faces
+
+
+@pytest.mark.parametrize("k", [2, 5, 12])
+def test_outline_packing_nests_charts_without_overlap(k):
+    uvs, faces = random_l_charts(k, seed=k)
     boxes = pack_charts(uvs, faces, packer="boxes")
     atlas = pack_charts(uvs, faces, packer="outlines")
     assert not charts_overlap(atlas.uvs, faces)
@@ -389,13 +395,7 @@ def test_outline_packing_fills_the_square():
     """Twelve L-shaped charts of random size and rotation: the outline packer (any rotation,
     finer raster) fills at least 75 % of the square (the quarter-turn packer before: 65 %)
     without overlaps, and keeps every chart's orientation."""
-    rng = np.random.default_rng(12)
-    uvs, faces = [], []
-    for _ in range(12):
-        P, F = l_chart(size=rng.uniform(0.3, 1.0))
-        t = rng.uniform(-np.pi, np.pi)
-        uvs.append(P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]]))
-        faces.append(F)
+    uvs, faces = random_l_charts(12, seed=12)
     atlas = pack_charts(uvs, faces, packer="outlines")
     assert atlas.fill >= 0.75
     assert not charts_overlap(atlas.uvs, faces)
@@ -412,13 +412,7 @@ def test_outline_packing_keeps_the_gutter_along_boundaries(k):
 
     from igl_heatseg.mesh.topology import boundary_loops
 
-    rng = np.random.default_rng(k)
-    uvs, faces = [], []
-    for _ in range(k):
-        P, F = l_chart(size=rng.uniform(0.3, 1.0))
-        t = rng.uniform(-np.pi, np.pi)
-        uvs.append(P @ np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]]))
-        faces.append(F)
+    uvs, faces = random_l_charts(k, seed=k)
     atlas = pack_charts(uvs, faces, packer="outlines")
     s = np.linspace(0, 1, 50)[:, None, None]
     pts = []

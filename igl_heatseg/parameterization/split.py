@@ -35,7 +35,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
-from ..mesh.topology import boundary_loops, edge_topology
+from ..mesh.topology import boundary_loops, edge_topology, face_adjacency, face_components
 from .cut import CutResult, chart_topology
 from .distortion import face_sym_dirichlet
 
@@ -209,11 +209,8 @@ def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
         return None
     C = UV[F].mean(axis=1)
     half = len(F) // 2
-    topo = edge_topology(F)
-    ef = topo.EF[topo.edge_face_count == 2]
     m = len(F)
-    rows, cols = np.r_[ef[:, 0], ef[:, 1]], np.r_[ef[:, 1], ef[:, 0]]
-    A = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
+    A = face_adjacency(F)
     for t in np.arange(HALVE_DIRECTIONS) * np.pi / HALVE_DIRECTIONS:
         x = C @ np.array([np.cos(t), np.sin(t)])
         order = np.argsort(x, kind="stable")  # a straight cut across the map
@@ -235,12 +232,7 @@ def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
 
 def _is_disk(F: np.ndarray) -> bool:
     """One face-connected piece that is a topological disk."""
-    topo = edge_topology(F)
-    ef = topo.EF[topo.edge_face_count == 2]
-    m = len(F)
-    A = sp.csr_matrix((np.ones(len(ef)), (ef[:, 0], ef[:, 1])), shape=(m, m))
-    return connected_components(A, directed=False)[0] == 1 and \
-        chart_topology(F, name="piece").is_disk
+    return face_components(F)[0] == 1 and chart_topology(F, name="piece").is_disk
 
 
 def _split_at_seam(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list | None:

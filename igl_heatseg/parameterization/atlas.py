@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
-from .outline_pack import OUTLINE_MAX_CHARTS, pack_outlines
+from .outline_pack import OUTLINE_MAX_CHARTS, pack_outlines, rotate_points
 
 __all__ = [
     "PackedAtlas",
@@ -200,28 +200,6 @@ def min_area_rotation(UV: ArrayLike) -> float:
     if len(H) >= 2 and best_ext[1] > best_ext[0]:
         best += np.pi / 2
     return float(np.arctan2(np.sin(best), np.cos(best)))
-
-
-def rotate_points(P: np.ndarray, t: float) -> np.ndarray:
-    """Points rotated by ``t`` radians counter-clockwise about the origin.
-
-    Parameters
-    ----------
-    P : (p, 2) float64
-    t : float
-
-    Returns
-    -------
-    (p, 2) float64
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rotate_points(np.array([[1.0, 0.0]]), np.pi / 2).round(12).tolist()
-    [[0.0, 1.0]]
-    """
-    c, s = np.cos(t), np.sin(t)
-    return P @ np.array([[c, s], [-s, c]])
 
 
 def _shelf(w: np.ndarray, h: np.ndarray, width: float) -> tuple[np.ndarray, float, float]:

@@ -32,6 +32,7 @@ from ..mesh.topology import boundary_loops
 
 __all__ = [
     "rasterize_chart",
+    "rotate_points",
     "gutter_structure",
     "pack_outlines",
     "OUTLINE_PIXELS",
@@ -222,7 +223,24 @@ class _Shape:
         self.b = b
 
 
-def _rotate(P: np.ndarray, t: float) -> np.ndarray:
+def rotate_points(P: np.ndarray, t: float) -> np.ndarray:
+    """Points rotated by ``t`` radians counter-clockwise about the origin.
+
+    Parameters
+    ----------
+    P : (p, 2) float64
+    t : float
+
+    Returns
+    -------
+    (p, 2) float64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rotate_points(np.array([[1.0, 0.0]]), np.pi / 2).round(12).tolist()
+    [[0.0, 1.0]]
+    """
     c, s = np.cos(t), np.sin(t)
     return P @ np.array([[c, s], [-s, c]])
 
@@ -236,7 +254,7 @@ def _shapes(local: list, faces: list, texel: float, gap: float, n_angles: list) 
         loops = boundary_loops(F)
         rot: list = []
         for t in np.arange(na) * (2 * np.pi / na):
-            Q = _rotate(P, t) if t else P
+            Q = rotate_points(P, t) if t else P
             R = rasterize_chart(Q - Q.min(axis=0) + _SHIFT * texel, F, texel, pad, loops)
             # one ring width for all angles of a chart (its frame in the grid)
             b = rot[0].b if rot else int(np.clip(round(_RING * np.sqrt(R.sum())), 2, 16))

@@ -53,11 +53,10 @@ def load(path: str):
         return load_mesh(path, repair=True), True
 
 
-def chart_row(path: str, mode: str) -> dict:
-    """Run the pipeline on one mesh and summarise its charts."""
+def chart_row(path: str, mesh, repaired: bool, mode: str) -> dict:
+    """Run the pipeline on one loaded mesh (:func:`load`) and summarise its charts."""
     from igl_heatseg.pipeline import run_pipeline
 
-    mesh, repaired = load(path)
     t = time.perf_counter()
     result = run_pipeline(mesh, mode=mode)
     dt = time.perf_counter() - t
@@ -115,14 +114,18 @@ def main(argv: list | None = None) -> int:
     ap.add_argument("--json", help="write the rows as JSON")
     args = ap.parse_args(argv)
     rows = []
+    from igl_heatseg.errors import MeshError
+
     for path in args.meshes:
-        xf = None
-        if args.xatlas:
-            m, _ = load(path)
-            xf, _ = xatlas_fill(m.V, m.F)
+        try:
+            mesh, repaired = load(path)
+        except MeshError as exc:  # one line per unreadable mesh
+            print(f"{Path(path).stem}: not read: {exc}", flush=True)
+            continue
+        xf = xatlas_fill(mesh.V, mesh.F)[0] if args.xatlas else None
         for mode in args.modes:
             try:
-                row = chart_row(path, mode)
+                row = chart_row(path, mesh, repaired, mode)
             except Exception as exc:  # a benchmark row, not a crash
                 print(f"{Path(path).stem} {mode}: FAILED {type(exc).__name__}: {exc}", flush=True)
                 continue

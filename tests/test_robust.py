@@ -234,6 +234,37 @@ def test_merge_by_primitives_joins_pieces_of_one_surface_only():
     assert count == 3 and len(np.unique(merged)) == 1
 
 
+def test_merge_by_primitives_needs_the_faces_along_the_fit_not_only_their_corners(monkeypatch):
+    import itertools
+
+    from scipy.spatial import ConvexHull
+
+    import igl_heatseg.segmentation.primitive_merge as pm
+
+    # a cube with its corners cut off (a coarse rounded box): every vertex lies on one sphere,
+    # but its 14 faces are flat, and far from the sphere between their corners
+    P = []
+    for axis, s in itertools.product(range(3), itertools.product((-1.0, 1.0), repeat=3)):
+        p = np.array(s)
+        p[axis] *= 0.85
+        P.append(p)
+    V = np.unique(np.round(P, 12), axis=0)
+    hull = ConvexHull(V)
+    F = hull.simplices.copy()
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    flip = (N * hull.equations[:, :3]).sum(axis=1) < 0
+    F[flip] = F[flip][:, ::-1]
+    labels = np.unique(np.round(hull.equations, 9), axis=0, return_inverse=True)[1].ravel()
+    assert len(np.unique(labels)) == 14
+    assert np.ptp(np.linalg.norm(V, axis=1)) < 1e-12
+    merged, count = pm.merge_by_primitives(V, F, labels, tol=0.05)
+    assert count == 0
+    # by their corners alone, one sphere explains them all
+    monkeypatch.setattr(pm, "MERGE_NORMAL_OFF", np.inf)
+    merged, count = pm.merge_by_primitives(V, F, labels, tol=0.05)
+    assert len(np.unique(merged)) == 1
+
+
 # ---------------------------------------------------------------- coarse CAD exports
 def cad_cylinder(n, r=10.0, height=30.0):
     """A cylinder as a CAD exporter writes it: strips from rim to rim, caps fanned from one rim

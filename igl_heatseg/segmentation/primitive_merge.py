@@ -22,6 +22,8 @@ __all__ = [
     "PRIMITIVE_TOL",
     "MERGE_RATIO",
     "MERGE_SLACK",
+    "MERGE_NORMAL_OFF",
+    "MERGE_NORMAL_ANGLE",
 ]
 
 #: Primitive type: a simpler fit is chosen when its RMS distance is within this many mean edge
@@ -35,6 +37,12 @@ MERGE_RATIO: float = 1.3
 MERGE_SLACK: float = 0.1
 #: Fewer points than this cannot be typed (``"Other"``).
 _MIN_FIT_POINTS = 8
+
+#: A union's fit is refused when the share of either piece's area with face normals over
+#: MERGE_NORMAL_ANGLE off the fit's exceeds that share on the piece's own fit by more than this.
+MERGE_NORMAL_OFF: float = 0.1
+MERGE_NORMAL_ANGLE: float = math.radians(25.0)
+_NORMAL_COS = math.cos(MERGE_NORMAL_ANGLE)
 
 
 # --------------------------------------------------------------------------------------------
@@ -198,8 +206,9 @@ def merge_by_primitives(
     small curved piece whose points it misses, which a single RMS over the union allows): the
     worse of the two pieces' RMS distances to the union's fit must be at most ``tol`` and at
     most ``ratio * max(rms_a, rms_b) + MERGE_SLACK * tol`` (the pieces' own fits: the noise
-    level).  The pair with the smallest such RMS goes first; fits are recomputed after every
-    merge.
+    level), and each piece's share of area whose face normals are more than MERGE_NORMAL_ANGLE
+    off the fit's may exceed that share on its own fit by at most MERGE_NORMAL_OFF. The pair
+    with the smallest such RMS goes first; fits are recomputed after every merge.
 
     Parameters
     ----------
@@ -228,26 +237,41 @@ def merge_by_primitives(
     labels = labels.copy()
     faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
 
-    def fit(fs):
-        res, _ = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
-        return math.inf if res is None else float(np.sqrt((res * res).mean()))
+    def off_share(fs, normals) -> float:
+        """Area share of the faces whose normals are over MERGE_NORMAL_ANGLE off the fit's."""
+        cos = np.abs(np.einsum("ij,ij->i", N[fs], normals(C[fs])))
+        return float(area[fs][cos < _NORMAL_COS].sum() / max(area[fs].sum(), 1e-300))
 
-    def union_fit(fa, fb):
+    def fit(fs):
+        """RMS of the best fit and the share of the faces off its normals (1: no fit)."""
+        res, normals = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
+        if res is None:
+            return math.inf, 1.0
+        return float(np.sqrt((res * res).mean())), off_share(fs, normals)
+
+    def union_fit(sa, sb):
         """RMS of the union's best fit over the points of each piece (the worse one); inf
         when the pieces face opposite ways on it (the two sides of a thin wall)."""
+        fa, fb = faces[sa], faces[sb]
         va, vb = np.unique(F[fa]), np.unique(F[fb])
         vs = np.union1d(va, vb)
         res, normals = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
         if res is None:
             return math.inf
-        side_a = (area[fa] * np.einsum("ij,ij->i", N[fa], normals(C[fa]))).sum()
-        side_b = (area[fb] * np.einsum("ij,ij->i", N[fb], normals(C[fb]))).sum()
-        if side_a * side_b < 0:
+        cos_a = np.einsum("ij,ij->i", N[fa], normals(C[fa]))
+        cos_b = np.einsum("ij,ij->i", N[fb], normals(C[fb]))
+        if (area[fa] * cos_a).sum() * (area[fb] * cos_b).sum() < 0:
             return math.inf
+        # the faces must lie along the fit as well as on their own piece's fit, not only their
+        # corners: the corners of a coarse rounded box all lie near one sphere, while its
+        # faces' normals are the box's (their own fits' normal noise is the reference)
+        for f, s in ((fa, sa), (fb, sb)):
+            if off_share(f, normals) > own[s][1] + MERGE_NORMAL_OFF:
+                return math.inf
         ra, rb = res[np.searchsorted(vs, va)], res[np.searchsorted(vs, vb)]
         return float(max(np.sqrt((ra * ra).mean()), np.sqrt((rb * rb).mean())))
 
-    rms = {s: fit(fs) for s, fs in faces.items()}
+    own = {s: fit(fs) for s, fs in faces.items()}  # (rms, share of faces off the fit's normals)
     inner = topo.interior
     ef = topo.EF[inner]
 
@@ -263,9 +287,9 @@ def merge_by_primitives(
         best, pair = math.inf, None
         for a, b in neighbours():
             if (a, b) not in cache:
-                cache[(a, b)] = union_fit(faces[a], faces[b])
+                cache[(a, b)] = union_fit(a, b)
             r = cache[(a, b)]
-            ok = r <= tol and (ratio <= 0 or r <= ratio * max(rms[a], rms[b]) + slack)
+            ok = r <= tol and (ratio <= 0 or r <= ratio * max(own[a][0], own[b][0]) + slack)
             if ok and r < best:
                 best, pair = r, (a, b)
         if pair is None:
@@ -273,7 +297,7 @@ def merge_by_primitives(
         a, b = pair
         faces[a] = np.concatenate([faces[a], faces.pop(b)])
         labels[faces[a]] = a
-        rms[a] = fit(faces[a])
-        rms.pop(b)
+        own[a] = fit(faces[a])
+        own.pop(b)
         cache = {k: v for k, v in cache.items() if a not in k and b not in k}
         merged += 1

@@ -152,8 +152,8 @@ def test_robust_mode_on_a_box_clean_and_noisy():
         h = igl.avg_edge_length(V, F)
         W = V if sigma == 0 else normal_noise(V, F, sigma * h, seed=3)
         seg = segment_robust(validate_mesh(W, F))
-        # an exact tessellation is refined by the fits, a noisy one only has boundaries moved
-        assert seg.refinement == ("full" if sigma == 0 else "moves")
+        # exact or noisy, the segments are refined by the fits
+        assert seg.refinement == "full"
         assert segment_robust(validate_mesh(W, F), refine=False).refinement == "off"
         assert isinstance(seg, RobustSegmentation) and isinstance(seg, Segmentation)
         assert purity(seg.labels, side) > 0.97 and coverage(seg.labels, side) > 0.97

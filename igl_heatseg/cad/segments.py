@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from igl_heatseg.surfaces.model import Surface
-from igl_heatseg.surfaces.refine import MIN_FIT_FACES, vertex_samples
+from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
 from igl_heatseg.surfaces.select import fit_surface
 from igl_heatseg.surfaces.tolerance import vertex_tolerance
 

@@ -83,8 +83,7 @@ def add_segment_arguments(p: argparse.ArgumentParser) -> None:
         help="paper: the paper's method, faithful (default); robust: for noisy scans and "
         "blends (denoised normals, curvature-class seeds, part-relative eps, primitive "
         "merging), with one fitted surface per segment (report.json `surfaces`, segmented.ply "
-        "surface_type; on exact CAD tessellations the segments are also refined by the fits: "
-        "`segment --refine/--no-refine`)",
+        "surface_type; the segments are refined by the fits: `segment --refine/--no-refine`)",
     )
     p.add_argument(
         "--theta",

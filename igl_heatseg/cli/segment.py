@@ -61,8 +61,7 @@ def register(subparsers) -> None:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="robust mode: refine the segments by their surface fits (split what no surface "
-        "explains, merge what one explains, move boundaries onto the surfaces); default: on "
-        "exact CAD tessellations, off on scans and noisy meshes",
+        "explains, merge what one explains, move boundaries onto the surfaces); default: on",
     )
     add_repair_argument(p)
     add_progress_argument(p)

@@ -69,7 +69,7 @@ from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
 from ..surfaces.refine import fit_segments, refine_segmentation
-from ..surfaces.tolerance import exact_tessellation, vertex_tolerance
+from ..surfaces.tolerance import vertex_tolerance
 from .coarse import (
     MAX_SUBDIVIDE,
     STARVED_SHARE,
@@ -183,8 +183,8 @@ class RobustSegmentation(Segmentation):
         input's own faces; then ``seed_mask``, ``seed_group``, ``final_group`` and
         ``vertex_class`` are those of the input's vertices in the subdivided mesh).
     refinement : str
-        What refined the labels by the fits: ``"full"`` (split, merge, move boundaries),
-        ``"moves"`` (boundary moves only) or ``"off"``.
+        What refined the labels by the fits: ``"full"`` (split, merge, move boundaries) or
+        ``"off"``.
     surfaces : list of Surface, length k, or None
         The fitted surface of every segment (:mod:`igl_heatseg.surfaces`), when fitted.
     """
@@ -384,13 +384,9 @@ def segment_robust(
     refine : bool, optional
         Refine the segmentation by the fits instead
         (:func:`igl_heatseg.surfaces.refine_segmentation`: split what no surface explains, merge
-        what one explains, move boundary faces to the surface they lie on). Default: all of it
-        on an exact CAD tessellation
-        (:func:`~igl_heatseg.surfaces.tolerance.exact_tessellation`), whose vertices lie on
-        the true surfaces; on a scan or noisy mesh only the boundary moves (splits and merges
-        there lost purity on the noisy generated tuning parts, e.g. .90 -> .73 on a noisy
-        flange; the moves alone gained .016 purity and .058 type accuracy on average).
-        ``True``: all of it; ``False``: none.
+        what one explains, move boundary faces to the surface they lie on). Default (``None``)
+        and ``True``: all of it, on exact CAD tessellations and noisy meshes alike (on noise a
+        merge must fit both parts about as well as their own fits do); ``False``: none.
     subdivide : int, optional
         Levels of midpoint subdivision (``igl.upsample``, each face into 4; the geometry does
         not change) the seeds and heat fields are computed on; the labels come back to the
@@ -421,12 +417,7 @@ def segment_robust(
     V, F = mesh.V, mesh.F
     n = V.shape[0]
     timings: dict[str, float] = {}
-    if refine is None:
-        refine = "full" if exact_tessellation(V, F) else "moves"
-        log.info("robust: %s tessellation: refinement %s",
-                 "exact" if refine == "full" else "noisy", refine)
-    else:
-        refine = "full" if refine else "off"
+    refine = "off" if refine is False else "full"
     topo = edge_topology(F)
     E = topo.E
     h = _mean_edge_length(V, E)
@@ -570,15 +561,13 @@ def _fit_tolerance(V, F, merge, refine, fit_surfaces) -> float | None:
 
 
 def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings, vtol):
-    """The common end of :func:`segment_robust`: refinement (``refine``: "full", "moves" or
-    "off") or one fit per segment, the final numbering, the old primitive types."""
+    """The common end of :func:`segment_robust`: refinement (``refine``: "full" or "off") or
+    one fit per segment, the final numbering, the old primitive types."""
     n = V.shape[0]
     surfaces = None
-    if refine != "off":  # "full": split, merge and move; "moves": boundary moves only
+    if refine != "off":  # split, merge and move
         t = time.perf_counter()
-        ref = refine_segmentation(V, F, labels1, vtol, normals_from=W,
-                                  progress=progress, split=refine == "full",
-                                  merge=refine == "full")
+        ref = refine_segmentation(V, F, labels1, vtol, normals_from=W, progress=progress)
         labels1, k1 = ref.labels, len(ref.surfaces)
         vlab1 = np.zeros(n, dtype=np.int64)
         vlab1[F.ravel()] = np.repeat(labels1, 3)

@@ -32,10 +32,21 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, face_normals
-from .model import SURFACE_KINDS, Surface
 from .samples import segment_adjacency, vertex_samples
-from .select import fit_surface
-from .tolerance import exact_tessellation, vertex_tolerance
+from .segment_fit import (
+    GROW_ANGLE,
+    GROW_TOL,
+    MIN_REGION_FACES,
+    PARAMS,
+    corner_rms,
+    explains,
+    fit_faces,
+    fit_segments,
+    normal_angle,
+    normals_agree,
+    rms_to,
+)
+from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
     "fit_segments",
@@ -61,15 +72,6 @@ MOVE_PASSES = 4
 #: Rounds of (merge, move boundary faces): a move can make two pieces of one surface adjacent.
 ROUNDS = 3
 
-#: A face joins a growing region when its corners' RMS distance to the region's surface is
-#: within GROW_TOL x tol ...
-GROW_TOL = 2.0
-
-#: ... and its normal is within this angle of the surface normal at its centroid (radians; a
-#: facet of a coarse cylinder has the surface normal at its centroid, a face across a crease
-#: does not).
-GROW_ANGLE = math.radians(25.0)
-
 #: When growth stalls, faces within STALL_TOL x tol are tried in a refit of the region (a
 #: cylinder first fitted as a plane on a small patch).
 STALL_TOL = 6.0
@@ -77,45 +79,19 @@ STALL_TOL = 6.0
 #: Rings of neighbours around a seed face in its first fit.
 SEED_RINGS = 2
 
-#: Regions of fewer faces are not kept from a seed (its faces stay free for other seeds).
-MIN_REGION_FACES = 3
-
 #: Two unexplained segments of at most this many faces each are tried in a union.
 MERGE_SMALL_FACES = 64
 
 #: A union is fitted only if one part's surface is within PRECHECK_TOL x tol (RMS) of the
-#: other part's vertices (sampled: about PRECHECK_SAMPLES of them). A part's surface that
-#: misses its neighbour by more cannot become the union's surface, and a more general kind
-#: fitting both would have fitted each part with the same kind.
+#: other part's vertices (:func:`~igl_heatseg.surfaces.segment_fit.rms_to`). A part's surface
+#: that misses its neighbour by more cannot become the union's surface, and a more general
+#: kind fitting both would have fitted each part with the same kind.
 PRECHECK_TOL = 10.0
-PRECHECK_SAMPLES = 200
 
 #: ... or when the face normals turn across their shared boundary by less than this on
 #: average (radians): the facets of a coarse curved surface (a 9-facet circle turns 40 degrees
 #: per facet) may join into one surface of a more general kind (strips -> cylinder).
 UPGRADE_ANGLE = math.radians(40.0)
-
-#: Parameters of each kind, and how many samples beyond them a fit needs to count as evidence
-#: (the curved kinds need two; a single triangle of a coarse export is a planar face).
-_PARAMS = {"plane": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
-MIN_EXTRA_SAMPLES = {"plane": 0, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 2}
-
-#: A fit whose surface normals disagree (by more than GROW_ANGLE) with the face normals on more
-#: than this share of the segment's area does not explain the segment (a fan cap fitted as a
-#: torus with its cylinder ring: a third; the faces of a noisy small hole: up to a tenth).
-NORMAL_OFF_SHARE = 0.2
-
-#: A segment's fit may leave out faces off its surface up to this share of its area (a
-#: boundary one triangle off); beyond it the segment is not explained.
-TRIM_SHARE = 0.05
-
-#: ... tried on segments of TRIM_MIN_FACES faces or more whose best fit is within TRIM_RMS x
-#: tol, or TRIM_REL x the segment's size, in RMS (one stray face of an exact tessellation: 17
-#: tol, 0.2 % of the size). Trimming every unexplained fit (unions, seed patches) tripled the
-#: run time.
-TRIM_RMS = 2.0
-TRIM_REL = 0.01
-TRIM_MIN_FACES = 50
 
 #: Rings of boundary faces left out of a segment's core fit, and the least share of the
 #: segment the core must keep.
@@ -135,12 +111,15 @@ SPLIT_GOOD_SHARE = 0.6
 #: The same bar on a noisy mesh, whose true faces fit at 0.6-0.85 tol (region fits carry their
 #: boundaries' noise; measured on a noisy pipe elbow's cylinder and torus).
 SPLIT_RMS_RATIO_NOISY = 0.9
+SPLIT_NOISY_SAMPLES = 4
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
-
-#: Segments with fewer faces are fitted as freeform.
-MIN_FIT_FACES = 1
+#: A merge on a noisy mesh: the worse part's RMS to the union's surface is at most this times the
+#: worse of the parts' own fits (their noise level) plus MERGE_NOISE_SLACK x tol (as
+#: ``segmentation.primitive_merge``'s MERGE_RATIO and MERGE_SLACK).
+MERGE_NOISE_RATIO = 1.3
+MERGE_NOISE_SLACK = 0.1
 
 
 @dataclass
@@ -173,108 +152,14 @@ class SurfaceSegmentation:
     timings: dict = field(default_factory=dict)
 
 
-def _fit(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surface:
-    """Fit ``faces`` (positions from ``V``; normals from ``W`` when given, face normals ``FN``
-    indexed by face id); ``trim``: try :func:`_trimmed_fit` when the fit fails on a few
-    faces."""
-    if len(faces) < MIN_FIT_FACES:
-        return Surface("freeform", {"centroid": V[F[faces]].reshape(-1, 3).mean(axis=0)},
-                       area=float(face_areas(V, F[faces]).sum()))
-    P, N, w = vertex_samples(V, F, faces, W)
-    # a kind needs more samples than parameters to be evidence (any 4 points lie on a sphere)
-    allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
-                    if k == "freeform" or len(P) >= _PARAMS[k] + MIN_EXTRA_SAMPLES[k])
-    s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
-    if trim and not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
-        TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
-    ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
-        s = _trimmed_fit(V, F, faces, tol, allowed, W, s, (P, N, w)) or s
-    if s.is_analytic:
-        # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
-        # three (radius, height) profile points, which a torus always passes through. The face
-        # normals must agree with the surface's too.
-        FN = face_normals(V if W is None else W, F) if FN is None else FN
-        if not _normals_agree(V, F, FN, faces, s):
-            return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
-                           max_dev=s.max_dev, area=float(face_areas(V, F[faces]).sum()))
-    return s
-
-
-def _normals_agree(V, F, FN, faces, s: Surface) -> bool:
-    """At most NORMAL_OFF_SHARE of the faces' area has normals over GROW_ANGLE off ``s``'s."""
-    A = face_areas(V, F[faces])
-    off = _normal_angle(V, F, FN, faces, s) > GROW_ANGLE
-    return bool(A[off].sum() <= NORMAL_OFF_SHARE * A.sum())
-
-
-def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface | None:
-    """A segment whose best surface is within tolerance in RMS but not in its largest deviation
-    usually holds a few faces of a neighbour (a boundary a triangle off): fit without the faces
-    whose corners are off that surface, when they are at most TRIM_SHARE of the area. The
-    boundary moves then hand those faces to the neighbour they lie on."""
-    P, N, w = samples  # the faces' vertex samples, as _fit took them
-    loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
-    if not loose.is_analytic:
-        return None
-    A = face_areas(V, F[faces])
-    # one least-trimmed-squares step: the stray faces tilt the loose fit, so rank the faces by
-    # their distance to it, refit without the worst TRIM_SHARE of the area, then check
-    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-    order = np.argsort(d, kind="stable")
-    keep = np.zeros(len(faces), dtype=bool)
-    keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
-    if keep.sum() < 2 * MIN_REGION_FACES:
-        return None
-    P, N, w = vertex_samples(V, F, faces[keep], W)
-    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
-    if not s.is_analytic:
-        return None
-    d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-    on = d <= GROW_TOL * tol
-    if A[~on].sum() > TRIM_SHARE * A.sum():
-        return None
-    P, N, w = vertex_samples(V, F, faces[on], W)
-    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
-    return s if s.is_analytic else None
-
-
-def _rms_to(V, F, faces, s: Surface) -> float:
-    """RMS distance of (a sample of about PRECHECK_SAMPLES of) the faces' vertices to ``s``."""
-    if not s.is_analytic:
-        return math.inf
-    verts = np.unique(F[faces])
-    verts = verts[:: max(1, len(verts) // PRECHECK_SAMPLES)]
-    d = s.distance(V[verts])
-    return float(np.sqrt((d * d).mean()))
-
-
-def _explains(s: Surface, tol: float) -> bool:
-    return s.is_analytic and s.rms <= tol
-
-
-def _corner_rms(V, F, faces, s: Surface) -> np.ndarray:
-    if not s.is_analytic:
-        return np.full(len(faces), np.inf)
-    d = s.distance(V[F[faces]].reshape(-1, 3)).reshape(-1, 3)
-    return np.sqrt((d * d).mean(axis=1))
-
-
-def _normal_angle(V, F, FN, faces, s: Surface) -> np.ndarray:
-    """Angle between each face's normal (``FN``, by face id) and the surface normal at its
-    centroid's projection."""
-    SN = s.normals(V[F[faces]].mean(axis=1))
-    cos = np.abs(np.einsum("ij,ij->i", SN, FN[faces]))
-    return np.arccos(np.clip(cos, -1.0, 1.0))
-
-
 def _adjacency(F: np.ndarray) -> np.ndarray:
     TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
     return TT
 
 
 def _fits_face(V, F, FN, faces, s, tol, k_tol):
-    return (_corner_rms(V, F, faces, s) <= k_tol * tol) & (
-        _normal_angle(V, F, FN, faces, s) <= GROW_ANGLE
+    return (corner_rms(V, F, faces, s) <= k_tol * tol) & (
+        normal_angle(V, F, FN, faces, s) <= GROW_ANGLE
     )
 
 
@@ -292,7 +177,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         ok[ok] &= np.einsum("ij,ij->i", FN[src[ok]], FN[nb[ok]]) >= math.cos(UPGRADE_ANGLE)
         ring = np.setdiff1d(np.unique(nb[ok]), patch)
         patch = np.union1d(patch, ring)
-    s = _fit(V, F, np.asarray(patch), tol, W=W, FN=FN)
+    s = fit_faces(V, F, np.asarray(patch), tol, W=W, FN=FN)
     if not s.is_analytic:
         return np.array([seed]), s
     region[seed] = True
@@ -308,8 +193,8 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
             stalled = False
             n = int(region.sum())
             if n >= 2 * fitted:
-                s2 = _fit(V, F, np.flatnonzero(region), tol, W=W, FN=FN)
-                if _explains(s2, tol):
+                s2 = fit_faces(V, F, np.flatnonzero(region), tol, W=W, FN=FN)
+                if explains(s2, tol):
                     s, fitted = s2, n
             continue
         if stalled or not len(cand):
@@ -317,14 +202,14 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         near = cand[_fits_face(V, F, FN, cand, s, tol, STALL_TOL)]
         if not len(near):
             break
-        s2 = _fit(V, F, np.r_[np.flatnonzero(region), near], tol, W=W, FN=FN)
-        if not _explains(s2, tol) or s2.max_dev > 3 * tol:
+        s2 = fit_faces(V, F, np.r_[np.flatnonzero(region), near], tol, W=W, FN=FN)
+        if not explains(s2, tol) or s2.max_dev > 3 * tol:
             break
         s, stalled = s2, True
     faces = np.flatnonzero(region)
     if fitted < len(faces):
-        s2 = _fit(V, F, faces, tol, W=W, FN=FN)
-        if _explains(s2, tol):
+        s2 = fit_faces(V, F, faces, tol, W=W, FN=FN)
+        if explains(s2, tol):
             s = s2
     return faces, s
 
@@ -389,7 +274,8 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
     return out[faces]
 
 
-def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, FN=None) -> int:
+def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, FN=None,
+           noisy: bool = False) -> int:
     """Greedy merging of adjacent segments whose union one surface explains; cheapest first.
 
     ``rejected`` caches the unions found unexplained (keyed by both parts' faces), so a later
@@ -423,7 +309,7 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
     heap = []
 
     def agree(faces, s) -> bool:
-        return _normals_agree(V, F, FNs, faces, s)
+        return normals_agree(V, F, FNs, faces, s)
 
     def smooth(a, b) -> bool:
         """The boundary bends less than a crease: facets of one curved surface, maybe."""
@@ -438,38 +324,51 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
         key = (len(faces_of[a]), int(faces_of[a].sum()), len(faces_of[b]), int(faces_of[b].sum()))
         if key in rejected:
             return
-        da, db = _rms_to(V, F, faces_of[b], fits[a]), _rms_to(V, F, faces_of[a], fits[b])
+        da, db = rms_to(V, F, faces_of[b], fits[a]), rms_to(V, F, faces_of[a], fits[b])
         # normals too: a fan cap's vertices all lie on its cylinder's rim
-        if da <= tol and _explains(fits[a], tol) and agree(faces_of[b], fits[a]):
+        if da <= tol and explains(fits[a], tol) and agree(faces_of[b], fits[a]):
             u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
-        elif db <= tol and _explains(fits[b], tol) and agree(faces_of[a], fits[b]):
+        elif db <= tol and explains(fits[b], tol) and agree(faces_of[a], fits[b]):
             u = fits[b]
         elif min(da, db) <= PRECHECK_TOL * tol or smooth(a, b) or (
             max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
-            and not _explains(fits[a], tol)
-            and not _explains(fits[b], tol)
+            and not explains(fits[a], tol)
+            and not explains(fits[b], tol)
         ):
             # untrimmed (a union that needs faces cut off is not one surface), and the normals
             # of each part on its own (a small cap on a big cylinder's rim passes the union's)
-            u = _fit(V, F, np.r_[faces_of[a], faces_of[b]], tol, W=W, FN=FN, trim=False)
+            u = fit_faces(V, F, np.r_[faces_of[a], faces_of[b]], tol, W=W, FN=FN, trim=False)
             if u.is_analytic and not (agree(faces_of[a], u) and agree(faces_of[b], u)):
                 u = None
         else:
             u = None
-        if u is None or not _explains(u, tol):
+        if u is not None and noisy and explains(u, tol):
+            # on noise, each part's own fit gives its noise level: the union's surface must
+            # fit both parts about as well (a dome's sphere explains the short cylinder below
+            # it within tolerance, but clearly worse than the cylinder's own fit)
+            worse = max(da if u is fits[a] else rms_to(V, F, faces_of[b], u),
+                        db if u is fits[b] else rms_to(V, F, faces_of[a], u))
+            noise = max(min(fits[a].rms, fits[b].rms), tol / K_NOISE)  # the better fit's
+            if worse > MERGE_NOISE_RATIO * noise + MERGE_NOISE_SLACK * tol:
+                u = None
+        if u is None or not explains(u, tol):
             rejected.add(key)
         else:
             cost = min(da, db) if u is fits[a] or u is fits[b] else u.rms
-            heapq.heappush(heap, (cost, a, b, id(u), u))
+            heapq.heappush(heap, (cost, a, b, id(u), u, key))
 
     for a, b in sorted(pairs):
         push(a, b)
     merged = 0
+    start = {k: (faces_of[k], fits[k]) for k in fits}
+    group = {k: ([k], []) for k in fits}  # the segments merged into k, and the pairs' keys
     while heap:
-        _, a, b, _, u = heapq.heappop(heap)
+        _, a, b, _, u, key = heapq.heappop(heap)
         if find(a) != a or find(b) != b:  # stale: one side was merged since
             continue
         parent[b] = a
+        gb = group.pop(b)
+        group[a] = (group[a][0] + gb[0], group[a][1] + gb[1] + [key])
         faces_of[a] = np.concatenate([faces_of[a], faces_of.pop(b)])
         fits[a] = u
         dirty.add(a)
@@ -487,7 +386,16 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
     for k, faces in faces_of.items():
         labels[faces] = k
     for k in dirty:  # one refit per merged segment, on all its faces
-        fits[k] = _fit(V, F, faces_of[k], tol, W=W, FN=FN)
+        fits[k] = fit_faces(V, F, faces_of[k], tol, W=W, FN=FN)
+        members, keys = group[k]
+        if noisy and not explains(fits[k], tol) and any(explains(start[o][1], tol)
+                                                         for o in members):
+            # on noise a chain of merges can drift off every surface: undo it
+            for o in members:
+                labels[start[o][0]] = o
+                fits[o] = start[o][1]
+            rejected.update(keys)
+            merged -= len(members) - 1
     return merged
 
 
@@ -505,19 +413,19 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) 
         own = np.full(len(F), np.inf)
         for k in np.unique(labels[cand_face]).tolist():
             sel = np.unique(cand_face[labels[cand_face] == k])
-            own[sel] = _corner_rms(V, F, sel, fits[k])
+            own[sel] = corner_rms(V, F, sel, fits[k])
         new = labels.copy()
         best = own.copy()
         for k in np.unique(cand_label).tolist():
             if not fits[k].is_analytic:
                 continue
             sel = cand_face[cand_label == k]
-            d = _corner_rms(V, F, sel, fits[k])
+            d = corner_rms(V, F, sel, fits[k])
             ok = (d < MOVE_RATIO * own[sel]) & (d <= GROW_TOL * tol) & (d < best[sel])
             # a face on its own surface stays (rounding decides between two exact fits), and
             # the normals must agree (a fan cap's corners all lie on its cylinder's rim)
             ok &= own[sel] > MOVE_FLOOR * tol
-            ok &= _normal_angle(V, F, FN, sel, fits[k]) <= GROW_ANGLE
+            ok &= normal_angle(V, F, FN, sel, fits[k]) <= GROW_ANGLE
             new[sel[ok]] = k
             best[sel[ok]] = d[ok]
         counts = np.bincount(new, minlength=labels.max() + 1)
@@ -529,7 +437,7 @@ def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) 
         moved += int((new != labels).sum())
         labels[:] = new
         for k in changed.tolist():
-            fits[k] = _fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+            fits[k] = fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
     return moved
 
 
@@ -546,13 +454,48 @@ def _core(F, labels, faces, TT) -> np.ndarray:
     return kept if len(kept) >= CORE_MIN_SHARE * len(faces) else faces
 
 
-def _real_split(V, F, parts, part_fits, tol, ratio=None) -> bool:
+def _evidence(F, part, s) -> bool:
+    """A fit on a noisy mesh is evidence with SPLIT_NOISY_SAMPLES x its parameters in vertices
+    (two noisy triangles fit a plane exactly)."""
+    return len(np.unique(F[part])) >= SPLIT_NOISY_SAMPLES * PARAMS.get(s.kind, 1)
+
+
+def _fold_weak(V, F, TT, tol, W, FN, parts, part_fits):
+    """Pieces of a split of a noisy segment whose fit is no evidence (:func:`_evidence`; the
+    leftovers of region growing along a noisy crease) join the adjacent piece they share most
+    edges with, smallest first; the pieces that grew are refitted."""
+    piece = np.full(len(F), -1, dtype=np.int64)
+    for r, part in enumerate(parts):
+        piece[part] = r
+    grown = set()
+    for r in sorted(range(len(parts)), key=lambda r: len(parts[r])):
+        if _evidence(F, parts[r], part_fits[r]):  # (a grown piece only gained vertices)
+            continue
+        nb = piece[TT[parts[r]][TT[parts[r]] >= 0]]
+        nb = nb[(nb >= 0) & (nb != r)]
+        if len(nb) == 0 or len(parts) - sum(len(p) == 0 for p in parts) <= 1:
+            continue
+        j = int(np.bincount(nb).argmax())
+        piece[parts[r]] = j
+        parts[j] = np.concatenate([parts[j], parts[r]])
+        parts[r] = parts[r][:0]
+        grown.add(j)
+    keep = [r for r in range(len(parts)) if len(parts[r])]
+    fits = [fit_faces(V, F, parts[r], tol, W=W, FN=FN) if r in grown else part_fits[r]
+            for r in keep]
+    return [parts[r] for r in keep], fits
+
+
+def _real_split(V, F, parts, part_fits, tol, ratio=None, noisy=False) -> bool:
     """A split found real faces when most of the area lies in pieces fitted well inside the
     tolerance (``ratio`` x tol: true faces of an exact tessellation fit to round-off); a smooth
-    freeform surface shatters into pieces each just within it, and stays whole."""
+    freeform surface shatters into pieces each just within it, and stays whole. On a noisy mesh
+    a piece counts only when its fit is evidence (:func:`_evidence`)."""
     ratio = SPLIT_RMS_RATIO if ratio is None else ratio
     A = np.array([face_areas(V, F[p]).sum() for p in parts])
     r = np.array([f.rms / tol if f.is_analytic else np.inf for f in part_fits])
+    if noisy:
+        r[[not _evidence(F, p, f) for p, f in zip(parts, part_fits, strict=True)]] = np.inf
     good = A[r <= ratio].sum()
     return bool(good >= SPLIT_GOOD_SHARE * A.sum())
 
@@ -577,8 +520,8 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
                 continue
             k = int(ls[np.argmax(counts)])
             one = np.array([f])
-            if (_corner_rms(V, F, one, fits[k])[0] <= GROW_TOL * tol
-                    and _normal_angle(V, F, FN, one, fits[k])[0] <= GROW_ANGLE):
+            if (corner_rms(V, F, one, fits[k])[0] <= GROW_TOL * tol
+                    and normal_angle(V, F, FN, one, fits[k])[0] <= GROW_ANGLE):
                 new[f] = k
                 moved += 1
         if moved == 0:
@@ -602,10 +545,10 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
         nb = [j for j in nb.tolist() if j != k]
         if not nb:
             continue
-        d = [float(np.sqrt(np.mean(_corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
+        d = [float(np.sqrt(np.mean(corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
         j = int(np.argmin(d))
-        tiny = len(faces) < MIN_REGION_FACES and not _explains(fits[k], tol)
-        on = d[j] <= GROW_TOL * tol and _normals_agree(V, F, FN, faces, fits[nb[j]])
+        tiny = len(faces) < MIN_REGION_FACES and not explains(fits[k], tol)
+        on = d[j] <= GROW_TOL * tol and normals_agree(V, F, FN, faces, fits[nb[j]])
         if on or tiny:
             labels[faces] = nb[j]
     return labels
@@ -689,22 +632,24 @@ def refine_segmentation(
     for i, k in enumerate(ks):
         progress("fit", i / max(len(ks), 1))
         faces = np.flatnonzero(labels == k)
-        s = _fit(V, F, faces, tol, W=W, FN=FN)
-        if not _explains(s, tol) and not exact:
+        s = fit_faces(V, F, faces, tol, W=W, FN=FN)
+        if not explains(s, tol) and not exact:
             # a noisy boundary carries a few of the neighbours' faces: fit the core (an exact
             # tessellation's boundaries are exact: there a segment off its surface is split)
             core = _core(F, labels, faces, TT)
             if len(core) < len(faces):
-                s_core = _fit(V, F, core, tol, W=W, FN=FN)
+                s_core = fit_faces(V, F, core, tol, W=W, FN=FN)
                 A = face_areas(V, F[faces])
-                on = _corner_rms(V, F, faces, s_core) <= GROW_TOL * tol
-                if _explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
+                on = corner_rms(V, F, faces, s_core) <= GROW_TOL * tol
+                if explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
-        if split and not _explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
+        if split and not explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
             sub = grow_regions(V, F, faces, tol, FN, TT, W)
             parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
-            part_fits = [_fit(V, F, part, tol, W=W, FN=FN) for part in parts]
-            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol, split_ratio):
+            part_fits = [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
+            if not exact and len(parts) > 1:
+                parts, part_fits = _fold_weak(V, F, TT, tol, W, FN, parts, part_fits)
+            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol, split_ratio, not exact):
                 n_split += 1
                 for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):
                     lab = k if r == 0 else nxt
@@ -721,7 +666,7 @@ def refine_segmentation(
     for _ in range(ROUNDS):  # moves can make segments adjacent that a merge then joins
         t = time.perf_counter()
         progress("merge", 0.0)
-        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN) if merge else 0
+        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN, not exact) if merge else 0
         timings["merge"] += time.perf_counter() - t
         t = time.perf_counter()
         progress("boundaries", 0.0)
@@ -730,7 +675,7 @@ def refine_segmentation(
         pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
         if len(np.unique(pieces)) != len(fits):
             labels = pieces
-            fits = {k: _fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+            fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
                     for k in np.unique(labels)}
         timings["boundaries"] += time.perf_counter() - t
         merged += m_round
@@ -748,52 +693,10 @@ def refine_segmentation(
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     labels = rank[inv].astype(np.int64)
-    surfaces = [_fit(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN) for k in range(len(order))]
+    surfaces = [fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+                for k in range(len(order))]
     timings["final_fit"] = time.perf_counter() - t
     progress("surfaces", 1.0)
     log.info("surfaces: %d segments (%d split, %d merges, %d faces moved), tol %.3g",
              len(surfaces), n_split, merged, moved, tol)
     return SurfaceSegmentation(labels, surfaces, tol, n_split, merged, moved, timings)
-
-
-def fit_segments(
-    V: np.ndarray,
-    F: np.ndarray,
-    labels: np.ndarray,
-    tol: float | None = None,
-    normals_from: np.ndarray | None = None,
-) -> list:
-    """One fitted surface per segment, the labels as they are.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    labels : (m,) int64
-        ``0..k-1``.
-    tol : float, optional
-        Default :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance`.
-    normals_from : (n, 3) float64, optional
-        Positions the normals come from (a denoised copy of ``V``).
-
-    Returns
-    -------
-    surfaces : list of Surface, length k
-        Fitted at the vertices, a few stray boundary faces trimmed (as in
-        :func:`refine_segmentation`).
-
-    Examples
-    --------
-    >>> import igl, numpy as np
-    >>> V, F = igl.loop(*igl.icosahedron(), 3)
-    >>> V /= np.linalg.norm(V, axis=1, keepdims=True)
-    >>> [s.kind for s in fit_segments(V, F, np.zeros(len(F), dtype=np.int64))]
-    ['sphere']
-    """
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    F = np.ascontiguousarray(F, dtype=np.int64)
-    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
-    tol = vertex_tolerance(V, F) if tol is None else float(tol)
-    FN = face_normals(V if W is None else W, F)
-    k = int(labels.max()) + 1 if len(labels) else 0
-    return [_fit(V, F, np.flatnonzero(labels == i), tol, W=W, FN=FN) for i in range(k)]

@@ -1,0 +1,345 @@
+"""One fitted surface per set of faces: the fits that :mod:`~igl_heatseg.surfaces.refine` splits,
+merges and moves boundaries with, and :func:`fit_segments` for labels as they are.
+
+A segment is fitted at its vertices (:func:`~igl_heatseg.surfaces.samples.vertex_samples`) with
+the simplest kind within tolerance (:func:`~igl_heatseg.surfaces.select.fit_surface`), a few
+stray boundary faces trimmed, and the face normals checked against the surface's: positions alone
+can be fooled (a fan cap's centre and rim lie on a torus through its cylinder's rim).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..mesh.geometry import face_areas, face_normals
+from .model import SURFACE_KINDS, Surface
+from .samples import vertex_samples
+from .select import fit_surface
+from .tolerance import vertex_tolerance
+
+__all__ = [
+    "fit_faces",
+    "fit_segments",
+    "normals_agree",
+    "rms_to",
+    "explains",
+    "corner_rms",
+    "normal_angle",
+]
+
+#: A face joins a growing region when its corners' RMS distance to the region's surface is
+#: within GROW_TOL x tol ...
+GROW_TOL = 2.0
+
+#: ... and its normal is within this angle of the surface normal at its centroid (radians; a
+#: facet of a coarse cylinder has the surface normal at its centroid, a face across a crease
+#: does not).
+GROW_ANGLE = math.radians(25.0)
+
+#: Regions of fewer faces are not kept from a seed (its faces stay free for other seeds).
+MIN_REGION_FACES = 3
+
+#: Vertices sampled by :func:`rms_to`.
+PRECHECK_SAMPLES = 200
+
+#: Parameters of each kind, and how many samples beyond them a fit needs to count as evidence
+#: (the curved kinds need two; a single triangle of a coarse export is a planar face).
+PARAMS = {"plane": 3, "cylinder": 5, "cone": 6, "sphere": 4, "torus": 7}
+MIN_EXTRA_SAMPLES = {"plane": 0, "cylinder": 2, "cone": 2, "sphere": 2, "torus": 2}
+
+#: A fit whose surface normals disagree (by more than GROW_ANGLE) with the face normals on more
+#: than this share of the segment's area does not explain the segment (a fan cap fitted as a
+#: torus with its cylinder ring: a third; the faces of a noisy small hole: up to a tenth).
+NORMAL_OFF_SHARE = 0.2
+
+#: A segment's fit may leave out faces off its surface up to this share of its area (a
+#: boundary one triangle off); beyond it the segment is not explained.
+TRIM_SHARE = 0.05
+
+#: ... tried on segments of TRIM_MIN_FACES faces or more whose best fit is within TRIM_RMS x
+#: tol, or TRIM_REL x the segment's size, in RMS (one stray face of an exact tessellation: 17
+#: tol, 0.2 % of the size). Trimming every unexplained fit (unions, seed patches) tripled the
+#: run time.
+TRIM_RMS = 2.0
+TRIM_REL = 0.01
+TRIM_MIN_FACES = 50
+
+#: Segments with fewer faces are fitted as freeform.
+MIN_FIT_FACES = 1
+
+
+def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surface:
+    """The simplest surface within ``tol`` of a set of faces' vertices, its normals checked.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Positions (distances are measured here).
+    F : (m, 3) int64
+    faces : (f,) int64
+        Face ids of the segment.
+    tol : float
+        RMS tolerance (model units).
+    kinds : sequence of str, optional
+        Kinds to try (default :data:`~igl_heatseg.surfaces.model.SURFACE_KINDS`); a kind needs
+        :data:`PARAMS` + :data:`MIN_EXTRA_SAMPLES` vertices to be tried.
+    W : (n, 3) float64, optional
+        Positions the normals come from (a denoised copy of ``V``).
+    FN : (m, 3) float64, optional
+        Unit face normals by face id (computed from ``W`` or ``V`` when not given).
+    trim : bool
+        When no kind fits, refit without stray faces up to TRIM_SHARE of the area (a boundary a
+        triangle off).
+
+    Returns
+    -------
+    Surface
+        ``freeform`` (with the best analytic fit's ``rms``) when the face normals disagree with
+        the fit on more than NORMAL_OFF_SHARE of the area (:func:`normals_agree`).
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V, F = igl.loop(*igl.icosahedron(), 2)
+    >>> V /= np.linalg.norm(V, axis=1, keepdims=True)
+    >>> s = fit_faces(V, F, np.arange(len(F)), 1e-3)
+    >>> s.kind, round(s.params["radius"], 6)
+    ('sphere', 1.0)
+    """
+    if len(faces) < MIN_FIT_FACES:
+        return Surface("freeform", {"centroid": V[F[faces]].reshape(-1, 3).mean(axis=0)},
+                       area=float(face_areas(V, F[faces]).sum()))
+    P, N, w = vertex_samples(V, F, faces, W)
+    # a kind needs more samples than parameters to be evidence (any 4 points lie on a sphere)
+    allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
+                    if k == "freeform" or len(P) >= PARAMS[k] + MIN_EXTRA_SAMPLES[k])
+    s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
+    if trim and not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
+        TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
+    ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
+        s = _trimmed_fit(V, F, faces, tol, allowed, W, s, (P, N, w)) or s
+    if s.is_analytic:
+        # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
+        # three (radius, height) profile points, which a torus always passes through. The face
+        # normals must agree with the surface's too.
+        FN = face_normals(V if W is None else W, F) if FN is None else FN
+        if not normals_agree(V, F, FN, faces, s):
+            return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
+                           max_dev=s.max_dev, area=float(face_areas(V, F[faces]).sum()))
+    return s
+
+
+def normals_agree(V, F, FN, faces, s: Surface) -> bool:
+    """At most NORMAL_OFF_SHARE of the faces' area has normals over GROW_ANGLE off ``s``'s.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    FN : (m, 3) float64
+        Unit face normals by face id (either orientation: the angle ignores the sign).
+    faces : (f,) int64
+    s : Surface
+        Analytic.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
+    >>> x = Surface("plane", {"point": np.zeros(3), "normal": np.array([1.0, 0, 0])})
+    >>> FN = np.array([[0.0, 0, -1]])
+    >>> normals_agree(V, F, FN, [0], z), normals_agree(V, F, FN, [0], x)
+    (True, False)
+    """
+    A = face_areas(V, F[faces])
+    off = normal_angle(V, F, FN, faces, s) > GROW_ANGLE
+    return bool(A[off].sum() <= NORMAL_OFF_SHARE * A.sum())
+
+
+def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface | None:
+    """A segment whose best surface is within tolerance in RMS but not in its largest deviation
+    usually holds a few faces of a neighbour (a boundary a triangle off): fit without the faces
+    whose corners are off that surface, when they are at most TRIM_SHARE of the area. The
+    boundary moves then hand those faces to the neighbour they lie on."""
+    P, N, w = samples  # the faces' vertex samples, as fit_faces took them
+    loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
+    if not loose.is_analytic:
+        return None
+    A = face_areas(V, F[faces])
+    # one least-trimmed-squares step: the stray faces tilt the loose fit, so rank the faces by
+    # their distance to it, refit without the worst TRIM_SHARE of the area, then check
+    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    order = np.argsort(d, kind="stable")
+    keep = np.zeros(len(faces), dtype=bool)
+    keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
+    if keep.sum() < 2 * MIN_REGION_FACES:
+        return None
+    P, N, w = vertex_samples(V, F, faces[keep], W)
+    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
+    if not s.is_analytic:
+        return None
+    d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    on = d <= GROW_TOL * tol
+    if A[~on].sum() > TRIM_SHARE * A.sum():
+        return None
+    P, N, w = vertex_samples(V, F, faces[on], W)
+    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
+    return s if s.is_analytic else None
+
+
+def rms_to(V, F, faces, s: Surface) -> float:
+    """RMS distance of (a sample of about PRECHECK_SAMPLES of) the faces' vertices to ``s``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (f,) int64
+    s : Surface
+
+    Returns
+    -------
+    float
+        Model units; ``inf`` for a freeform ``s``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 1], [1, 0, 1], [0, 1, 1]]); F = np.array([[0, 1, 2]])
+    >>> rms_to(V, F, [0], Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])}))
+    1.0
+    """
+    if not s.is_analytic:
+        return math.inf
+    verts = np.unique(F[faces])
+    verts = verts[:: max(1, len(verts) // PRECHECK_SAMPLES)]
+    d = s.distance(V[verts])
+    return float(np.sqrt((d * d).mean()))
+
+
+def explains(s: Surface, tol: float) -> bool:
+    """An analytic surface whose RMS is within ``tol``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> s = Surface("sphere", {"center": np.zeros(3), "radius": 1.0}, rms=0.2)
+    >>> explains(s, 0.3), explains(s, 0.1)
+    (True, False)
+    """
+    return s.is_analytic and s.rms <= tol
+
+
+def corner_rms(V, F, faces, s: Surface) -> np.ndarray:
+    """RMS distance of each face's three corners to ``s``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (f,) int64
+    s : Surface
+
+    Returns
+    -------
+    (f,) float64
+        Model units; ``inf`` for a freeform ``s``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 3]]); F = np.array([[0, 1, 2]])
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
+    >>> corner_rms(V, F, [0], z)
+    array([1.73205081])
+    """
+    if not s.is_analytic:
+        return np.full(len(faces), np.inf)
+    d = s.distance(V[F[faces]].reshape(-1, 3)).reshape(-1, 3)
+    return np.sqrt((d * d).mean(axis=1))
+
+
+def normal_angle(V, F, FN, faces, s: Surface) -> np.ndarray:
+    """Angle between each face's normal and the surface normal at its centroid's projection.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    FN : (m, 3) float64
+        Unit face normals by face id.
+    faces : (f,) int64
+    s : Surface
+        Analytic.
+
+    Returns
+    -------
+    (f,) float64
+        Radians in [0, pi/2] (unsigned: the two orientations count as one).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]); F = np.array([[0, 1, 2]])
+    >>> s = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
+    >>> float(np.degrees(normal_angle(V, F, np.array([[1.0, 0, 1]]) / np.sqrt(2), [0], s)[0]))
+    45.0
+    """
+    SN = s.normals(V[F[faces]].mean(axis=1))
+    cos = np.abs(np.einsum("ij,ij->i", SN, FN[faces]))
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def fit_segments(
+    V: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    tol: float | None = None,
+    normals_from: np.ndarray | None = None,
+) -> list:
+    """One fitted surface per segment, the labels as they are.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    tol : float, optional
+        Default :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance`.
+    normals_from : (n, 3) float64, optional
+        Positions the normals come from (a denoised copy of ``V``).
+
+    Returns
+    -------
+    surfaces : list of Surface, length k
+        Fitted at the vertices, a few stray boundary faces trimmed (:func:`fit_faces`, as in
+        :func:`~igl_heatseg.surfaces.refine.refine_segmentation`).
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> V, F = igl.loop(*igl.icosahedron(), 3)
+    >>> V /= np.linalg.norm(V, axis=1, keepdims=True)
+    >>> [s.kind for s in fit_segments(V, F, np.zeros(len(F), dtype=np.int64))]
+    ['sphere']
+    """
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
+    tol = vertex_tolerance(V, F) if tol is None else float(tol)
+    FN = face_normals(V if W is None else W, F)
+    k = int(labels.max()) + 1 if len(labels) else 0
+    return [fit_faces(V, F, np.flatnonzero(labels == i), tol, W=W, FN=FN) for i in range(k)]

@@ -115,9 +115,12 @@ SPLIT_NOISY_SAMPLES = 4
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
+
 #: A merge on a noisy mesh: the worse part's RMS to the union's surface is at most this times the
-#: worse of the parts' own fits (their noise level) plus MERGE_NOISE_SLACK x tol (as
-#: ``segmentation.primitive_merge``'s MERGE_RATIO and MERGE_SLACK).
+#: noise level plus MERGE_NOISE_SLACK x tol. The noise level is the better of the parts' own fit
+#: RMS (a part mixing two surfaces fits worse than the noise), floored at tol / K_NOISE (a few
+#: faces fit better than the noise). As ``segmentation.primitive_merge``'s MERGE_RATIO and
+#: MERGE_SLACK.
 MERGE_NOISE_RATIO = 1.3
 MERGE_NOISE_SLACK = 0.1
 

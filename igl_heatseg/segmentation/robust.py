@@ -68,7 +68,8 @@ from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
-from ..surfaces.refine import fit_segments, refine_segmentation
+from ..surfaces.refine import refine_segmentation
+from ..surfaces.segment_fit import fit_segments
 from ..surfaces.tolerance import vertex_tolerance
 from .coarse import (
     MAX_SUBDIVIDE,

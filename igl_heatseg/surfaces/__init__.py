@@ -7,8 +7,9 @@ returns :class:`Surface` objects and new labels. Imports only from ``mesh`` and 
 
 from .model import ANALYTIC_KINDS, SURFACE_KINDS, Surface
 from .primitives import fit_cone, fit_cylinder, fit_plane, fit_sphere, fit_torus
-from .refine import SurfaceSegmentation, fit_segments, refine_segmentation, segment_adjacency
+from .refine import SurfaceSegmentation, refine_segmentation, segment_adjacency
 from .samples import face_residuals, face_samples
+from .segment_fit import fit_segments
 from .select import fit_surface, surface_residual, within_tolerance
 from .tolerance import fit_tolerance, noise_level, vertex_tolerance
 

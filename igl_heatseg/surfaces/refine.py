@@ -41,7 +41,6 @@ from .segment_fit import (
     corner_rms,
     explains,
     fit_faces,
-    fit_segments,
     normal_angle,
     normals_agree,
     rms_to,
@@ -49,7 +48,6 @@ from .segment_fit import (
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
-    "fit_segments",
     "SurfaceSegmentation",
     "refine_segmentation",
     "segment_adjacency",

@@ -469,18 +469,22 @@ def _fold_weak(V, F, TT, tol, W, FN, parts, part_fits):
     for r, part in enumerate(parts):
         piece[part] = r
     grown = set()
+    alive = len(parts)  # pieces not folded yet (every piece of grow_regions has faces)
     for r in sorted(range(len(parts)), key=lambda r: len(parts[r])):
+        if alive <= 1:
+            break
         if _evidence(F, parts[r], part_fits[r]):  # (a grown piece only gained vertices)
             continue
         nb = piece[TT[parts[r]][TT[parts[r]] >= 0]]
         nb = nb[(nb >= 0) & (nb != r)]
-        if len(nb) == 0 or len(parts) - sum(len(p) == 0 for p in parts) <= 1:
+        if len(nb) == 0:
             continue
         j = int(np.bincount(nb).argmax())
         piece[parts[r]] = j
         parts[j] = np.concatenate([parts[j], parts[r]])
         parts[r] = parts[r][:0]
         grown.add(j)
+        alive -= 1
     keep = [r for r in range(len(parts)) if len(parts[r])]
     fits = [fit_faces(V, F, parts[r], tol, W=W, FN=FN) if r in grown else part_fits[r]
             for r in keep]

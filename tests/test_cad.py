@@ -327,3 +327,71 @@ def test_failed_build_writes_the_faceted_model(monkeypatch, tmp_path):
     assert fid["faces"] == len(F) and fid["valid"] and fid["solids"] == 1
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
     assert len(faces_of(read_step(write_step(res.shape, tmp_path / "f.step")))) == len(F)
+
+
+def test_invalid_segments_names_the_segment_of_an_invalid_face():
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.BRepTools import BRepTools
+    from OCP.Geom import Geom_Plane
+    from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    from igl_heatseg.cad.build import _invalid_segments
+
+    V, F, labels = box_mesh(2)
+    good = faces_of(build_brep(V, F, labels, box_planes()).shape)
+    # a face whose wire (the top face's, at z = 1) lies off its plane (z = 5): no pcurves
+    plane = Geom_Plane(gp_Pln(gp_Pnt(0, 0, 5), gp_Dir(0, 0, 1)))
+    bad = BRepBuilderAPI_MakeFace(plane, BRepTools.OuterWire_s(good[0]), True).Face()
+    assert not BRepCheck_Analyzer(bad).IsValid()
+    faces = good[1:] + [bad]
+    shape, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(shape)
+    for f in faces:
+        builder.Add(shape, f)
+    built = [dict(status="built")] * 6
+    assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5], built) == {5}
+    # the invalid face is a faceted segment's: faceting cannot mend it
+    assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5],
+                             built[:5] + [dict(status="faceted")]) is None
+    assert _invalid_segments(build_brep(V, F, labels, box_planes()).shape, good,
+                             [0, 1, 2, 3, 4, 5], built) == []
+
+
+def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    real, calls = build_mod._invalid_segments, []
+
+    def first_side_invalid(shape, faces, owner, status):
+        calls.append(len(faces))
+        return {2} if len(calls) == 1 else real(shape, faces, owner, status)
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", first_side_invalid)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert calls == [6, 5 + 8]  # one rebuild: side 2 as its 8 triangles
+    assert res.to_report()["not_built"] == [2] and not res.faceted_model
+    assert "BRepCheck" in res.faces[2]["reason"] and "BRepCheck" in res.message
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
+
+
+def test_model_still_invalid_after_the_rebuilds_is_written_faceted(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    calls = []
+
+    def always_invalid(shape, faces, owner, status):
+        calls.append(1)
+        return {len(calls) - 1}
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", always_invalid)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert len(calls) == build_mod.MAX_REBUILDS + 1
+    assert res.faceted_model and "BRepCheck" in res.message
+    assert res.fidelity["valid"] and res.fidelity["faces"] == len(F)

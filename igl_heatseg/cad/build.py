@@ -24,7 +24,7 @@ from ._ocp import require_ocp
 
 require_ocp()
 
-from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
@@ -34,7 +34,7 @@ from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
-from .fidelity import brep_fidelity  # noqa: E402
+from .fidelity import brep_fidelity, faces_of  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph  # noqa: E402
 
@@ -76,6 +76,10 @@ MOVE_EDGE_FRACTION = 0.5
 #: Widest sewing tolerance tried when a closed part keeps free edges, in mean edge lengths
 #: (wider would merge distinct mesh vertices).
 SEW_MAX_EDGE = 0.5
+
+#: Rebuilds with the segments whose sewn faces fail BRepCheck faceted, before the whole model
+#: is faceted (an invalid face can hang OCC's mesher, and a CAD program reading the file).
+MAX_REBUILDS = 2
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -548,18 +552,37 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
     closed = _is_closed(F)
     timings: dict = {}
+    skip: dict = {}  # segments faceted because their sewn face failed BRepCheck
+    cache: dict = {}
     try:
-        faces, status, sew_tol = _build_faces(V, F, labels, surfaces, uv, ctx, timings,
-                                              progress)
-        t = time.perf_counter()
-        progress("sew", 0.0)
-        shape, info = assemble(faces, sew_tol, closed, max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
+        for attempt in range(MAX_REBUILDS + 1):
+            faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
+                                                         timings, progress, skip, cache)
+            t = time.perf_counter()
+            progress("sew", 0.0)
+            shape, info = assemble(faces, sew_tol, closed,
+                                   max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
+            timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
+            bad = _invalid_segments(shape, faces, owner, status)
+            if not bad:
+                break
+            if bad is None or attempt == MAX_REBUILDS:
+                # an invalid face can hang OCC's mesher (and any CAD program reading it)
+                raise _InvalidBRep("the sewn B-Rep has invalid faces (BRepCheck)")
+            logger.warning("sewn faces of segments %s are invalid (BRepCheck); faceting them",
+                           sorted(bad))
+            skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
         sew_tol = info["sew_tol"]
-        timings["sew"] = time.perf_counter() - t
         message = "" if info["solid"] or not closed else "closed mesh but the shell is open"
+        if skip:
+            message = (message + "; " if message else "") + (
+                f"{len(skip)} face(s) faceted after failing BRepCheck in the sewn shell")
         faceted_model = False
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
-        logger.exception("B-Rep build failed; writing the faceted model")
+        if isinstance(exc, _InvalidBRep):
+            logger.warning("%s; writing the faceted model", exc)
+        else:
+            logger.exception("B-Rep build failed; writing the faceted model")
         shape = _faceted_result(V, F, ctx, closed, timings, str(exc))
         status = [dict(index=a, kind=s.kind, status="faceted", reason=f"build failed: {exc}",
                        max_dev=None) for a, s in enumerate(surfaces)]
@@ -574,9 +597,35 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     return CadResult(shape, status, fid, timings, tols, faceted_model, message)
 
 
-def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
-    """Surfaces, vertices, edges and faces; (faces, per-face status, sewing tolerance)."""
+class _InvalidBRep(RuntimeError):
+    """The sewn shape stays invalid after the rebuilds."""
+
+
+def _invalid_segments(shape, faces, owner, status):
+    """Segments whose face in the sewn ``shape`` fails BRepCheck: [] when the shape is valid,
+    None when an invalid face is not a built segment's (a faceted triangle, a unified face)."""
+    if BRepCheck_Analyzer(shape).IsValid():
+        return []
+    surf = [BRep_Tool.Surface_s(f) for f in faces]  # sewing and fixing keep the surfaces
+    bad = set()
+    for f in faces_of(shape):
+        if BRepCheck_Analyzer(f).IsValid():
+            continue
+        s = BRep_Tool.Surface_s(f)
+        hit = [owner[j] for j, t in enumerate(surf) if t == s]
+        if not hit or status[hit[0]]["status"] != "built":
+            return None
+        bad.add(hit[0])
+    return bad or None
+
+
+def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):
+    """Surfaces, vertices, edges and faces: (faces, per-segment status, sewing tolerance,
+    the segment of each face). Segments in ``skip`` (index -> reason) are faceted; ``cache``
+    keeps the surfaces between calls."""
     k = len(surfaces)
+    skip = {} if skip is None else skip
+    cache = {} if cache is None else cache
     t = time.perf_counter()
     graph = boundary_graph(V, F, labels, k)
     seg_faces = [np.flatnonzero(labels == a) for a in range(k)]
@@ -585,7 +634,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
     geoms, projs, devs, reasons = [], [], [], []
     for a, s in enumerate(surfaces):
         progress("surfaces", a / k)
-        g, p, d, r = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+        if a not in cache:
+            cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+        g, p, d, r = cache[a]
+        if a in skip and r is None:
+            g, p, r = None, None, skip[a]
         geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
     timings["surfaces"] = time.perf_counter() - t
     ctx["devs"] = devs
@@ -612,7 +665,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
     timings["edges"] = time.perf_counter() - t
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
-    faces, status = [], []
+    faces, status, owner = [], [], []
     areas = _segment_areas(V, F, labels, k)
     for a in range(k):
         progress("faces", a / k)
@@ -620,14 +673,17 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress):
             a, geoms[a], graph.loops[a], edges, ctx, areas[a], V[np.unique(F[seg_faces[a]])])
         if face is not None:
             faces.append(face)
+            owner.append(a)
         else:
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
-            faces.extend(faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"]))
+            tri = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"])
+            faces.extend(tri)
+            owner.extend([a] * len(tri))
         status.append(dict(index=a, kind=surfaces[a].kind,
                            status="built" if face is not None else "faceted", reason=reason,
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
     timings["faces"] = time.perf_counter() - t
-    return faces, status, ctx["sew_tol"]
+    return faces, status, ctx["sew_tol"], owner
 
 
 def _segment_areas(V, F, labels, k):

@@ -380,6 +380,16 @@ def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypat
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
 
 
+def test_invalid_model_without_a_segment_to_blame_is_written_faceted(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", lambda *args: None)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert res.faceted_model and "BRepCheck" in res.message
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
 def test_model_still_invalid_after_the_rebuilds_is_written_faceted(monkeypatch):
     import igl_heatseg.cad.build as build_mod
 

@@ -564,11 +564,12 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             bad = _invalid_segments(shape, faces, owner, status)
-            if not bad:
+            if bad == []:
                 break
             if bad is None or attempt == MAX_REBUILDS:
                 # an invalid face can hang OCC's mesher (and any CAD program reading it)
-                raise _InvalidBRep("the sewn B-Rep has invalid faces (BRepCheck)")
+                raise _InvalidBRep("the sewn B-Rep is invalid (BRepCheck) and faceting the segments"
+                                   " of its invalid faces did not mend it")
             logger.warning("sewn faces of segments %s are invalid (BRepCheck); faceting them",
                            sorted(bad))
             skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})

@@ -140,3 +140,27 @@ def test_noisy_dome_stays_apart_from_its_tangent_cylinder(monkeypatch):
     monkeypatch.setattr(rf, "MERGE_NOISE_RATIO", np.inf)
     r = refine_segmentation(V, F, labels)
     assert [s.kind for s in r.surfaces] == ["sphere"]
+
+
+def test_region_growing_gives_up_on_a_smooth_freeform_patch(monkeypatch):
+    """A freeform height field shatters into regions each just within the tolerance; once the
+    badly fitted ones hold more than 1 - SPLIT_GOOD_SHARE of the area no split can be real, and
+    growing stops (a 168k-face scan spent minutes growing such regions)."""
+    from scipy.spatial import Delaunay
+
+    import igl_heatseg.surfaces.refine as R
+
+    x, y = (a.ravel() for a in np.meshgrid(np.linspace(-1, 1, 25), np.linspace(-1, 1, 25)))
+    V = np.c_[x, y, 0.3 * np.sin(2 * x) * np.cos(3 * y)]
+    F = Delaunay(V[:, :2]).simplices.astype(np.int64)
+    faces, tol = np.arange(len(F)), 1e-3
+    grown, real = [], R._grow_one
+    monkeypatch.setattr(R, "_grow_one", lambda *a, **k: grown.append(1) or real(*a, **k))
+    full = R.grow_regions(V, F, faces, tol)
+    n_full = len(grown)
+    parts = [faces[full == r] for r in range(full.max() + 1)]
+    fits = [R.fit_faces(V, F, p, tol) for p in parts]
+    assert len(parts) > 10 and not R._real_split(V, F, parts, fits, tol)
+    grown.clear()
+    assert np.all(R.grow_regions(V, F, faces, tol, good_rms=R.SPLIT_RMS_RATIO) == 0)
+    assert len(grown) < n_full / 3

@@ -165,8 +165,9 @@ def _fits_face(V, F, FN, faces, s, tol, k_tol):
 
 
 def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
-    """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface), a freeform
-    surface when no surface explains the seed's patch (its SEED_RINGS rings)."""
+    """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface, own): the
+    surface is a freeform one when no surface explains the seed's patch (its SEED_RINGS rings);
+    own is the fit of exactly ``faces`` when one was made, else None."""
     region = np.zeros(len(F), dtype=bool)
     ring = np.array([seed])
     patch = np.array([seed])
@@ -180,9 +181,10 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         patch = np.union1d(patch, ring)
     s = fit_faces(V, F, np.asarray(patch), tol, W=W, FN=FN)
     if not s.is_analytic:
-        return np.array([seed]), s
+        return np.array([seed]), s, None
     region[seed] = True
     fitted = 1
+    own_n = -1  # the region's size when s was fitted to exactly the region, else -1
     stalled = False
     while True:
         cand = np.unique(TT[region].ravel())
@@ -196,7 +198,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
             if n >= 2 * fitted:
                 s2 = fit_faces(V, F, np.flatnonzero(region), tol, W=W, FN=FN)
                 if explains(s2, tol):
-                    s, fitted = s2, n
+                    s, fitted, own_n = s2, n, n
             continue
         if stalled or not len(cand):
             break
@@ -208,14 +210,16 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
             break
         s, stalled = s2, True
     faces = np.flatnonzero(region)
+    own = s if own_n == len(faces) else None
     if fitted < len(faces):
-        s2 = fit_faces(V, F, faces, tol, W=W, FN=FN)
-        if explains(s2, tol):
-            s = s2
-    return faces, s
+        own = fit_faces(V, F, faces, tol, W=W, FN=FN)
+        if explains(own, tol):
+            s = own
+    return faces, s, own
 
 
-def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
+def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
+                 noisy=False) -> np.ndarray:
     """Split a face set into regions that one surface each explains, by region growing.
 
     Parameters
@@ -230,12 +234,30 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
         Face normals; TT : (m, 3) int64, optional, ``igl.triangle_triangle_adjacency``.
     W : (n, 3) float64, optional
         Positions for normals (a denoised copy of ``V``).
+    good_rms : float, optional
+        Give up as soon as no split can be real (:func:`_real_split` with this ratio): when
+        regions fitted worse than ``good_rms`` x tol already cover more than
+        ``1 - SPLIT_GOOD_SHARE`` of the area (a smooth freeform segment, which shatters into
+        regions each just within the tolerance); then every face gets region 0.
+    noisy : bool
+        With ``good_rms``: a region counts as fitted worse only when its fit is evidence
+        (:func:`_evidence`), as in :func:`_real_split` on a noisy mesh.
 
     Returns
     -------
     region : (k,) int64
         Region id of each face of ``faces``, ``0..r-1``; faces no surface explains form
         regions of their own (their connected pieces).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial import Delaunay
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 9), np.linspace(0, 1, 5))
+    >>> V = np.c_[x.ravel(), y.ravel(), np.abs(x.ravel())]          # a fold: two planes
+    >>> F = Delaunay(V[:, :2]).simplices.astype(np.int64)
+    >>> np.bincount(grow_regions(V, F, np.arange(len(F)), 1e-6))
+    array([32, 32])
     """
     FN = face_normals(V if W is None else W, F) if FN is None else FN
     TT = _adjacency(F) if TT is None else TT
@@ -248,10 +270,15 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
     out = np.full(len(F), -1, dtype=np.int64)
     tried = np.zeros(len(F), dtype=bool)
     r = 0
+    if good_rms is not None:
+        area = face_areas(V, F[faces])
+        lost_bar, lost = (1.0 - SPLIT_GOOD_SHARE) * area.sum(), 0.0
+        area_of = np.zeros(len(F))
+        area_of[faces] = area
     for seed in order.tolist():
         if not free[seed] or tried[seed]:
             continue
-        grown, s = _grow_one(V, F, FN, TT, free, seed, tol, W)
+        grown, s, own = _grow_one(V, F, FN, TT, free, seed, tol, W)
         if not s.is_analytic:  # nor, mostly, the overlapping patches of its 1-ring: skip them
             tried[seed] = True
             tried[TT[seed][TT[seed] >= 0]] = True
@@ -265,6 +292,13 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None) -> np.ndarray:
         out[grown] = r
         free[grown] = False
         r += 1
+        if good_rms is not None:
+            own = fit_faces(V, F, grown, tol, W=W, FN=FN) if own is None else own
+        if good_rms is not None and (not own.is_analytic or own.rms > good_rms * tol) and (
+                not noisy or _evidence(F, grown, own)):
+            lost += area_of[grown].sum()
+            if lost > lost_bar:  # the good regions can no longer hold SPLIT_GOOD_SHARE
+                return np.zeros(len(faces), dtype=np.int64)
     rest = faces[out[faces] < 0]
     if len(rest):  # what no surface explains: its connected pieces
         sub = np.full(len(F), -1, dtype=np.int64)
@@ -649,7 +683,7 @@ def refine_segmentation(
                 if explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
         if split and not explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
-            sub = grow_regions(V, F, faces, tol, FN, TT, W)
+            sub = grow_regions(V, F, faces, tol, FN, TT, W, split_ratio, not exact)
             parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
             part_fits = [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
             if not exact and len(parts) > 1:

@@ -338,8 +338,9 @@ def test_invalid_segments_names_the_segment_of_an_invalid_face():
     from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
     from OCP.TopoDS import TopoDS_Compound
 
-    from igl_heatseg.cad.build import _invalid_segments
+    import igl_heatseg.cad.build as build_mod
 
+    _invalid_segments = build_mod._invalid_segments
     V, F, labels = box_mesh(2)
     good = faces_of(build_brep(V, F, labels, box_planes()).shape)
     # a face whose wire (the top face's, at z = 1) lies off its plane (z = 5): no pcurves

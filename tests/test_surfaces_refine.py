@@ -164,3 +164,28 @@ def test_region_growing_gives_up_on_a_smooth_freeform_patch(monkeypatch):
     grown.clear()
     assert np.all(R.grow_regions(V, F, faces, tol, good_rms=R.SPLIT_RMS_RATIO) == 0)
     assert len(grown) < n_full / 3
+
+
+
+def test_chamfers_one_triangle_wide_are_whole_cones(data_dir):
+    """A generated nut (data/nut_s3000: 13 B-Rep faces) has 45-degree chamfers on its bore one
+    triangle wide, with no vertex inside them. The heat fields label each chamfer triangle like
+    two of its corners, so the band alternates between the bore and the end face; no segment
+    holds two of its triangles side by side, and the band shattered into single faces (80
+    segments). Gathered and grown again, every segment is one true face."""
+    import igl_heatseg.surfaces.refine as R
+    from igl_heatseg.evaluation.metrics import read_labels
+    from igl_heatseg.evaluation.surfaces import read_surface_types
+    from igl_heatseg.io import load_mesh
+    from igl_heatseg.segmentation.robust import segment_robust
+
+    mesh = load_mesh(data_dir / "nut_s3000.obj")
+    truth = read_labels(data_dir / "nut_s3000.facelabels.txt", len(mesh.F))
+    types = read_surface_types(data_dir / "nut_s3000.surface_types.txt")
+    r = segment_robust(mesh)
+    assert len(r.surfaces) == len(types) == 13
+    for k, s in enumerate(r.surfaces):
+        t = np.unique(truth[r.labels == k])
+        assert len(t) == 1 and np.all(r.labels[truth == t[0]] == k)  # one whole true face
+        assert s.kind == types[t[0]].lower()
+    assert R.exact_tessellation(mesh.V, mesh.F)

@@ -7,7 +7,10 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
 2. **Split** every segment that no surface explains by fit-driven region growing inside it
    (:func:`grow_regions`): seeds from smooth interiors, a surface fitted to the seed's rings,
    growth over faces whose corners lie on it, refits as the region grows (a small patch of a
-   cylinder looks planar; the refit on the grown region finds the cylinder).
+   cylinder looks planar; the refit on the grown region finds the cylinder). On an exact
+   tessellation, the faces off their segment's surface and the faces of tiny segments are then
+   gathered and grown again (:func:`_regrow_strays`): a chamfer one triangle wide, which the
+   heat fields deal out between its two neighbours, becomes one cone.
 3. **Merge** adjacent segments that one surface explains within tolerance, cheapest union first
    (Attene et al. 2006): strips of a coarse cylinder, a plane split by noise.
 4. **Move boundary faces** to the neighbouring surface they lie on, refitting between passes (a
@@ -593,6 +596,47 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
     return labels
 
 
+def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int) -> int:
+    """On an exact tessellation: the faces off their segment's surface (corner RMS above
+    GROW_TOL x tol) and the faces of segments under SHARD_FACES faces, gathered, are grown into
+    regions again (:func:`grow_regions`); a region that one surface explains, of at least
+    MIN_REGION_FACES faces, becomes a segment. The heat fields give each triangle of a chamfer
+    one triangle wide (no vertex inside it) the label of two of its corners, so the band
+    alternates between its two neighbours, and no segment holds two of its faces side by side.
+    Returns the segments made."""
+    counts = np.bincount(labels)
+    stray = np.zeros(len(F), dtype=bool)
+    stray[counts[labels] < SHARD_FACES] = True
+    for k, s in fits.items():
+        if s.is_analytic and counts[k] >= SHARD_FACES:
+            faces = np.flatnonzero(labels == k)
+            stray[faces[corner_rms(V, F, faces, s) > GROW_TOL * tol]] = True
+    cand = np.flatnonzero(stray)
+    if len(cand) < MIN_REGION_FACES:
+        return 0
+    sub = grow_regions(V, F, cand, tol, FN, TT, W)
+    made = 0
+    for r in range(int(sub.max()) + 1):
+        part = cand[sub == r]
+        if len(part) < MIN_REGION_FACES or len(np.unique(labels[part])) < 2:
+            continue  # (a region within one segment: the segment's own business)
+        u = fit_faces(V, F, part, tol, W=W, FN=FN)
+        if not explains(u, tol):
+            continue
+        old = np.unique(labels[part])
+        labels[part] = nxt
+        fits[nxt] = u
+        nxt += 1
+        made += 1
+        for k in old.tolist():
+            rest = np.flatnonzero(labels == k)
+            if len(rest):
+                fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
+            else:
+                del fits[k]
+    return made
+
+
 def _face_connected(F, labels, TT=None) -> np.ndarray:
     """Split every label into its face-connected pieces; returns piece ids ``0..p-1``."""
     TT = _adjacency(F) if TT is None else TT
@@ -697,6 +741,13 @@ def refine_segmentation(
                     fits[lab] = fr
                 continue
         fits[k] = s
+    if split and exact:
+        n_split += _regrow_strays(V, F, labels, fits, tol, TT, W, FN, nxt)
+        pieces = _face_connected(F, labels, TT)  # the old segments may fall apart
+        if len(np.unique(pieces)) != len(fits):
+            labels = pieces
+            fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+                    for k in np.unique(labels)}
     timings["fit_split"] = time.perf_counter() - t
 
     merged = moved = 0

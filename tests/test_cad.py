@@ -406,3 +406,26 @@ def test_model_still_invalid_after_the_rebuilds_is_written_faceted(monkeypatch):
     assert len(calls) == build_mod.MAX_REBUILDS + 1
     assert res.faceted_model and "BRepCheck" in res.message
     assert res.fidelity["valid"] and res.fidelity["faces"] == len(F)
+
+
+def test_faces_with_loose_edges_are_meshed_at_their_edges_tolerance():
+    """OCC's mesher spends minutes on a face whose edges' tolerance (raised by sewing) is far
+    above the deflection; such a face is meshed at its edges' tolerance, and the fidelity
+    reports the coarser deflection it measured with."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    from igl_heatseg.cad.fidelity import mesh_faces
+
+    box = BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()
+    assert mesh_faces(box, 0.01) == 0.01
+    edge = TopoDS.Edge(TopExp_Explorer(box, TopAbs_EDGE).Current())
+    BRep_Builder().UpdateEdge(edge, 0.2)  # as sewing leaves an edge beside a faceted patch
+    assert mesh_faces(box, 0.01) == pytest.approx(0.2)
+    V, F, labels = box_mesh(2)
+    fid = brep_fidelity(box, (V + 1.0) / 2.0, F)
+    assert fid["measurement_deflection"] == pytest.approx(0.2) and fid["faces"] == 6
+    assert fid["hausdorff"] < 1e-9

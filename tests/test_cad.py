@@ -429,3 +429,30 @@ def test_faces_with_loose_edges_are_meshed_at_their_edges_tolerance():
     fid = brep_fidelity(box, (V + 1.0) / 2.0, F)
     assert fid["measurement_deflection"] == pytest.approx(0.2) and fid["faces"] == 6
     assert fid["hausdorff"] < 1e-9
+
+
+def test_face_invalid_only_after_the_step_round_trip_is_found(monkeypatch):
+    """A sewn torus passed BRepCheck in memory and failed once written to STEP and read back;
+    the check reads the file back and names the in-memory face at the same place."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepTools import BRepTools
+    from OCP.Geom import Geom_Plane
+    from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(2)
+    shape = build_brep(V, F, labels, box_planes()).shape
+    assert build_mod._invalid_faces(shape) == []  # valid in memory and read back
+    faces = faces_of(shape)
+    plane = Geom_Plane(gp_Pln(gp_Pnt(0, 0, 5), gp_Dir(0, 0, 1)))
+    broken = BRepBuilderAPI_MakeFace(plane, BRepTools.OuterWire_s(faces[3]), True).Face()
+    back, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(back)
+    for i, f in enumerate(faces):
+        builder.Add(back, broken if i == 3 else f)
+    monkeypatch.setattr(build_mod, "read_step", lambda path: back)
+    bad = build_mod._invalid_faces(shape)
+    assert len(bad) == 1 and bad[0].IsSame(faces[3])

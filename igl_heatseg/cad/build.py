@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import logging
 import math
+import tempfile
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -36,6 +38,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .fidelity import brep_fidelity, faces_of  # noqa: E402
 from .sew import assemble  # noqa: E402
+from .step import read_step, write_step  # noqa: E402
 from .topology import boundary_graph  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -602,16 +605,34 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
-def _invalid_segments(shape, faces, owner, status):
-    """Segments whose face in the sewn ``shape`` fails BRepCheck: [] when the shape is valid,
-    None when an invalid face is not a built segment's (a faceted triangle, a unified face)."""
-    if BRepCheck_Analyzer(shape).IsValid():
+def _invalid_faces(shape) -> list | None:
+    """The faces of ``shape`` that fail BRepCheck in memory or, when it passes there, once
+    written to STEP and read back (what a reader of ``model.step`` gets: a sewn torus passed in
+    memory and failed after the round trip); [] when valid both ways, None when invalid with
+    no face to blame."""
+    if not BRepCheck_Analyzer(shape).IsValid():
+        return [f for f in faces_of(shape) if not BRepCheck_Analyzer(f).IsValid()] or None
+    with tempfile.TemporaryDirectory() as tmp:
+        back = read_step(write_step(shape, Path(tmp) / "check.step"))
+    if BRepCheck_Analyzer(back).IsValid():
         return []
+    mine, theirs = faces_of(shape), faces_of(back)
+    if len(mine) != len(theirs):  # (the reader keeps the faces in order)
+        return None
+    return [f for f, g in zip(mine, theirs, strict=True)
+            if not BRepCheck_Analyzer(g).IsValid()] or None
+
+
+def _invalid_segments(shape, faces, owner, status):
+    """Segments whose face in the sewn ``shape`` fails BRepCheck (:func:`_invalid_faces`): []
+    when the shape is valid, None when an invalid face is not a built segment's (a faceted
+    triangle, a unified face) or none is to blame."""
+    bad_faces = _invalid_faces(shape)
+    if not bad_faces:
+        return bad_faces
     surf = [BRep_Tool.Surface_s(f) for f in faces]  # sewing and fixing keep the surfaces
     bad = set()
-    for f in faces_of(shape):
-        if BRepCheck_Analyzer(f).IsValid():
-            continue
+    for f in bad_faces:
         s = BRep_Tool.Surface_s(f)
         hit = [owner[j] for j, t in enumerate(surf) if t == s]
         if not hit or status[hit[0]]["status"] != "built":

@@ -302,10 +302,11 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
     F = np.asarray(F, dtype=np.int64)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     by_type, _ = _face_table(shape)
+    valid = bool(BRepCheck_Analyzer(shape).IsValid())  # before meshing (seen to change it)
     deflection = mesh_faces(shape, MESH_DEFLECTION_REL * diag)  # (tessellate reuses it)
     haus, rms, one_sided, missing = _distances(shape, V, F, diag)
     out = {
-        "valid": bool(BRepCheck_Analyzer(shape).IsValid()),
+        "valid": valid,
         "solids": _count(shape, TopAbs_SOLID),
         "shells": _count(shape, TopAbs_SHELL),
         "faces": len(faces_of(shape)),

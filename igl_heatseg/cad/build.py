@@ -21,6 +21,7 @@ import numpy as np
 
 from igl_heatseg.errors import MeshError
 from igl_heatseg.surfaces.model import Surface
+from igl_heatseg.surfaces.samples import segment_adjacency
 
 from ._ocp import require_ocp
 
@@ -557,6 +558,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     timings: dict = {}
     skip: dict = {}  # segments faceted because their sewn face failed BRepCheck
     cache: dict = {}
+    neighbours = _segment_neighbours(F, labels, len(surfaces))
     try:
         for attempt in range(MAX_REBUILDS + 1):
             faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
@@ -566,7 +568,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             shape, info = assemble(faces, sew_tol, closed,
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
-            bad = _invalid_segments(shape, faces, owner, status)
+            bad = _invalid_segments(shape, faces, owner, status, neighbours)
             if bad == []:
                 break
             if bad is None or attempt == MAX_REBUILDS:
@@ -623,10 +625,13 @@ def _invalid_faces(shape) -> list | None:
             if not BRepCheck_Analyzer(g).IsValid()] or None
 
 
-def _invalid_segments(shape, faces, owner, status):
-    """Segments whose face in the sewn ``shape`` fails BRepCheck (:func:`_invalid_faces`): []
-    when the shape is valid, None when an invalid face is not a built segment's (a faceted
-    triangle, a unified face) or none is to blame."""
+def _invalid_segments(shape, faces, owner, status, neighbours=None):
+    """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
+    (:func:`_invalid_faces`): a built segment's own face, or, for an invalid triangle of a
+    faceted segment, the built segments next to it (``neighbours``: segment -> set of adjacent
+    segments), whose edges it was sewn to. [] when the shape is valid; None when a face is to
+    blame that no built segment accounts for (a unified face, an isolated faceted patch, the
+    shell itself)."""
     bad_faces = _invalid_faces(shape)
     if not bad_faces:
         return bad_faces
@@ -635,9 +640,15 @@ def _invalid_segments(shape, faces, owner, status):
     for f in bad_faces:
         s = BRep_Tool.Surface_s(f)
         hit = [owner[j] for j, t in enumerate(surf) if t == s]
-        if not hit or status[hit[0]]["status"] != "built":
+        if not hit:
             return None
-        bad.add(hit[0])
+        if status[hit[0]]["status"] == "built":
+            bad.add(hit[0])
+            continue
+        near = {b for b in (neighbours or {}).get(hit[0], ()) if status[b]["status"] == "built"}
+        if not near:
+            return None
+        bad |= near
     return bad or None
 
 
@@ -706,6 +717,16 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
     timings["faces"] = time.perf_counter() - t
     return faces, status, ctx["sew_tol"], owner
+
+
+def _segment_neighbours(F, labels, k) -> dict:
+    """Segment -> set of the segments sharing an edge with it."""
+    fa, fb = segment_adjacency(F, labels)
+    out: dict = {a: set() for a in range(k)}
+    for a, b in zip(labels[fa].tolist(), labels[fb].tolist(), strict=True):
+        out[a].add(b)
+        out[b].add(a)
+    return out
 
 
 def _segment_areas(V, F, labels, k):

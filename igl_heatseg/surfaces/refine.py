@@ -211,7 +211,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         s2 = fit_faces(V, F, np.r_[np.flatnonzero(region), near], tol, W=W, FN=FN)
         if not explains(s2, tol) or s2.max_dev > 3 * tol:
             break
-        s, stalled = s2, True
+        s, stalled, own_n = s2, True, -1  # (fitted to more than the region)
     faces = np.flatnonzero(region)
     own = s if own_n == len(faces) else None
     if fitted < len(faces):

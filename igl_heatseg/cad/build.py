@@ -527,8 +527,10 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     Returns
     -------
     CadResult
-        Never raises for geometry it cannot build: such faces are faceted and reported, and
-        a failed build returns the fully faceted model (``faceted_model=True``).
+        Never raises for geometry it cannot build: such faces are faceted and reported. A
+        segment whose face fails BRepCheck once sewn (in memory, or read back from STEP) is
+        faceted and the model rebuilt (up to MAX_REBUILDS times); a failed build, or a model
+        still invalid, returns the fully faceted model (``faceted_model=True``).
 
     Raises
     ------

@@ -166,7 +166,6 @@ def test_region_growing_gives_up_on_a_smooth_freeform_patch(monkeypatch):
     assert len(grown) < n_full / 3
 
 
-
 def test_chamfers_one_triangle_wide_are_whole_cones(data_dir):
     """A generated nut (data/nut_s3000: 13 B-Rep faces) has 45-degree chamfers on its bore one
     triangle wide, with no vertex inside them. The heat fields label each chamfer triangle like

@@ -146,7 +146,7 @@ def mesh_faces(shape, deflection: float) -> float:
 
 
 def tessellate(shape, deflection: float):
-    """Triangles of a B-Rep.
+    """Triangles of a B-Rep (each face meshed by :func:`mesh_faces`).
 
     Returns
     -------
@@ -157,21 +157,33 @@ def tessellate(shape, deflection: float):
         Faces OCC could not tessellate (left out).
     """
     mesh_faces(shape, deflection)
+    return _triangles(shape, deflection)
+
+
+def _face_triangles(face, deflection: float):
+    """(P (p, 3), T (q, 3)) of a meshed face, T oriented like the face; None without a
+    triangulation."""
+    tri, loc = _triangulation(face, deflection)
+    if tri is None:
+        return None
+    trsf = loc.Transformation()
+    P = np.array([[q.X(), q.Y(), q.Z()] for q in
+                  (tri.Node(i).Transformed(trsf) for i in range(1, tri.NbNodes() + 1))])
+    T = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
+    return P, (T[:, ::-1] if face.Orientation() == TopAbs_REVERSED else T)
+
+
+def _triangles(shape, deflection: float):
+    """:func:`tessellate` of a shape already meshed."""
     Vs, Fs, off, missing = [], [], 0, 0
     for face in faces_of(shape):
-        tri, loc = _triangulation(face, deflection)
-        if tri is None:
+        got = _face_triangles(face, deflection)
+        if got is None:
             missing += 1
             continue
-        trsf = loc.Transformation()
-        P = np.array([[q.X(), q.Y(), q.Z()] for q in
-                      (tri.Node(i).Transformed(trsf) for i in range(1, tri.NbNodes() + 1))])
-        T = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
-        if face.Orientation() == TopAbs_REVERSED:
-            T = T[:, ::-1]
-        Vs.append(P)
-        Fs.append(T + off)
-        off += len(P)
+        Vs.append(got[0])
+        Fs.append(got[1] + off)
+        off += len(got[0])
     if not Vs:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), missing
     return np.vstack(Vs), np.vstack(Fs).astype(np.int64), missing
@@ -214,15 +226,10 @@ def tessellate_by_type(shape, deflection: float):
     Vs, Fs, ids, types, off = [], [], [], [], 0
     for i, face in enumerate(faces_of(shape)):
         types.append(face_type(face))
-        tri, loc = _triangulation(face, deflection)
-        if tri is None:
+        got = _face_triangles(face, deflection)
+        if got is None:
             continue
-        trsf = loc.Transformation()
-        P = np.array([[q.X(), q.Y(), q.Z()] for q in
-                      (tri.Node(j).Transformed(trsf) for j in range(1, tri.NbNodes() + 1))])
-        T = np.array([tri.Triangle(j).Get() for j in range(1, tri.NbTriangles() + 1)]) - 1
-        if face.Orientation() == TopAbs_REVERSED:
-            T = T[:, ::-1]
+        P, T = got
         Vs.append(P)
         Fs.append(T + off)
         ids.append(np.full(len(T), i, dtype=np.int64))
@@ -246,10 +253,12 @@ def _face_table(shape) -> tuple[dict, list]:
 
 
 def _distances(shape, V, F, diag):
-    """(two-sided Hausdorff, RMS and max of mesh vertices -> B-Rep, untessellated faces)."""
-    TV, TF, missing = tessellate(shape, MESH_DEFLECTION_REL * diag)  # (meshed by mesh_faces)
+    """(two-sided Hausdorff, RMS and max of mesh vertices -> B-Rep, untessellated faces, the
+    largest deflection used)."""
+    deflection = mesh_faces(shape, MESH_DEFLECTION_REL * diag)
+    TV, TF, missing = _triangles(shape, MESH_DEFLECTION_REL * diag)
     if len(TF) == 0:
-        return math.inf, math.inf, math.inf, missing
+        return math.inf, math.inf, math.inf, missing, deflection
     d_mesh = np.sqrt(igl.point_mesh_squared_distance(V, TV, TF)[0])  # mesh vertices -> B-Rep
     if missing:  # vertices of untessellated faces: exact distances to the shape
         far = np.argsort(d_mesh)[::-1][:EXACT_DISTANCE_MAX]
@@ -261,7 +270,8 @@ def _distances(shape, V, F, diag):
                 d_mesh[i] = min(d_mesh[i], dist.Value())
     d_brep = np.sqrt(igl.point_mesh_squared_distance(TV, V, F)[0])  # B-Rep samples -> mesh
     d = np.r_[d_mesh, d_brep]
-    return float(d.max()), float(np.sqrt(np.mean(d_mesh**2))), float(d_mesh.max()), missing
+    return (float(d.max()), float(np.sqrt(np.mean(d_mesh**2))), float(d_mesh.max()), missing,
+            deflection)
 
 
 def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
@@ -303,8 +313,7 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     by_type, _ = _face_table(shape)
     valid = bool(BRepCheck_Analyzer(shape).IsValid())  # before meshing (seen to change it)
-    deflection = mesh_faces(shape, MESH_DEFLECTION_REL * diag)  # (tessellate reuses it)
-    haus, rms, one_sided, missing = _distances(shape, V, F, diag)
+    haus, rms, one_sided, missing, deflection = _distances(shape, V, F, diag)
     out = {
         "valid": valid,
         "solids": _count(shape, TopAbs_SOLID),

@@ -615,7 +615,7 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int) ->
     if len(cand) < MIN_REGION_FACES:
         return 0
     sub = grow_regions(V, F, cand, tol, FN, TT, W)
-    made = 0
+    made, touched = 0, set()
     for r in range(int(sub.max()) + 1):
         part = cand[sub == r]
         if len(part) < MIN_REGION_FACES or len(np.unique(labels[part])) < 2:
@@ -623,18 +623,28 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int) ->
         u = fit_faces(V, F, part, tol, W=W, FN=FN)
         if not explains(u, tol):
             continue
-        old = np.unique(labels[part])
+        touched.update(np.unique(labels[part]).tolist())
         labels[part] = nxt
         fits[nxt] = u
         nxt += 1
         made += 1
-        for k in old.tolist():
-            rest = np.flatnonzero(labels == k)
-            if len(rest):
-                fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
-            else:
-                del fits[k]
+    for k in touched:  # what the regions left of the old segments, refitted once
+        rest = np.flatnonzero(labels == k)
+        if len(rest):
+            fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
+        else:
+            del fits[k]
     return made
+
+
+def _reconnect(V, F, labels, fits: dict, tol: float, TT, W, FN):
+    """(labels, fits) with every segment face-connected: when a segment fell apart, every
+    piece gets its own label and all segments are refitted."""
+    pieces = _face_connected(F, labels, TT)
+    if len(np.unique(pieces)) == len(fits):
+        return labels, fits
+    return pieces, {k: fit_faces(V, F, np.flatnonzero(pieces == k), tol, W=W, FN=FN)
+                    for k in np.unique(pieces)}
 
 
 def _face_connected(F, labels, TT=None) -> np.ndarray:
@@ -743,11 +753,7 @@ def refine_segmentation(
         fits[k] = s
     if split and exact:
         n_split += _regrow_strays(V, F, labels, fits, tol, TT, W, FN, nxt)
-        pieces = _face_connected(F, labels, TT)  # the old segments may fall apart
-        if len(np.unique(pieces)) != len(fits):
-            labels = pieces
-            fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
-                    for k in np.unique(labels)}
+        labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)  # old segments may split
     timings["fit_split"] = time.perf_counter() - t
 
     merged = moved = 0
@@ -762,11 +768,7 @@ def refine_segmentation(
         progress("boundaries", 0.0)
         mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN)
         mv_round += _smooth_teeth(V, F, labels, fits, tol, TT, FN)
-        pieces = _face_connected(F, labels, TT)  # a move may cut a segment in two
-        if len(np.unique(pieces)) != len(fits):
-            labels = pieces
-            fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
-                    for k in np.unique(labels)}
+        labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)  # a move may cut one
         timings["boundaries"] += time.perf_counter() - t
         merged += m_round
         moved += mv_round

@@ -237,17 +237,20 @@ def merge_by_primitives(
     labels = labels.copy()
     faces = {int(s): np.flatnonzero(labels == s) for s in np.unique(labels)}
 
-    def off_share(fs, normals) -> float:
+    def cosines(fs, normals) -> np.ndarray:
+        """Cosine between each face's normal and the fit's normal at its centroid."""
+        return np.einsum("ij,ij->i", N[fs], normals(C[fs]))
+
+    def off_share(fs, cos) -> float:
         """Area share of the faces whose normals are over MERGE_NORMAL_ANGLE off the fit's."""
-        cos = np.abs(np.einsum("ij,ij->i", N[fs], normals(C[fs])))
-        return float(area[fs][cos < _NORMAL_COS].sum() / max(area[fs].sum(), 1e-300))
+        return float(area[fs][np.abs(cos) < _NORMAL_COS].sum() / max(area[fs].sum(), 1e-300))
 
     def fit(fs):
         """RMS of the best fit and the share of the faces off its normals (1: no fit)."""
         res, normals = _best_residuals(V[np.unique(F[fs])], N[fs], diag)
         if res is None:
             return math.inf, 1.0
-        return float(np.sqrt((res * res).mean())), off_share(fs, normals)
+        return float(np.sqrt((res * res).mean())), off_share(fs, cosines(fs, normals))
 
     def union_fit(sa, sb):
         """RMS of the union's best fit over the points of each piece (the worse one); inf
@@ -258,15 +261,14 @@ def merge_by_primitives(
         res, normals = _best_residuals(V[vs], N[np.concatenate([fa, fb])], diag)
         if res is None:
             return math.inf
-        cos_a = np.einsum("ij,ij->i", N[fa], normals(C[fa]))
-        cos_b = np.einsum("ij,ij->i", N[fb], normals(C[fb]))
+        cos_a, cos_b = cosines(fa, normals), cosines(fb, normals)
         if (area[fa] * cos_a).sum() * (area[fb] * cos_b).sum() < 0:
             return math.inf
         # the faces must lie along the fit as well as on their own piece's fit, not only their
         # corners: the corners of a coarse rounded box all lie near one sphere, while its
         # faces' normals are the box's (their own fits' normal noise is the reference)
-        for f, s in ((fa, sa), (fb, sb)):
-            if off_share(f, normals) > own[s][1] + MERGE_NORMAL_OFF:
+        for f, cos, s in ((fa, cos_a, sa), (fb, cos_b, sb)):
+            if off_share(f, cos) > own[s][1] + MERGE_NORMAL_OFF:
                 return math.inf
         ra, rb = res[np.searchsorted(vs, va)], res[np.searchsorted(vs, vb)]
         return float(max(np.sqrt((ra * ra).mean()), np.sqrt((rb * rb).mean())))

@@ -383,6 +383,60 @@ def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypat
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
 
 
+def test_open_segments_names_the_segments_along_the_free_edges():
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(2)
+    good = faces_of(build_brep(V, F, labels, box_planes()).shape)
+    centre = [_centroid(f) for f in good]
+    opposite = int(np.argmax([np.linalg.norm(c - centre[0]) for c in centre]))
+    shell, info = build_mod.assemble(good[1:], 1e-6, closed=False)
+    assert info["free_edges_after_sewing"] == 4  # the square hole where good[0] was
+    owner, built = list(range(6)), [dict(status="built")] * 6
+    around = set(range(1, 6)) - {opposite}
+    assert build_mod._open_segments(shell, good, owner, built, {}) == around
+    # a faceted segment on the hole: its built neighbours are to blame instead
+    j = min(around)
+    status = [dict(status="faceted") if i == j else built[i] for i in range(6)]
+    assert build_mod._open_segments(shell, good, owner, status, {j: {j, opposite}}) == (
+        around - {j}) | {opposite}
+    closed, _ = build_mod.assemble(good, 1e-6, closed=True)
+    assert build_mod._open_segments(closed, good, owner, built, {}) == set()
+
+
+def test_free_edges_of_a_closed_mesh_facet_their_segments_and_rebuild(monkeypatch):
+    """A closed mesh whose sewn shell stays open: the built segments along its free edges are
+    faceted and the model rebuilt, into a valid solid."""
+    import igl_heatseg.cad.build as build_mod
+
+    real, calls = build_mod.assemble, []
+
+    def first_without_side_2(faces, *args, **kwargs):
+        calls.append(len(faces))
+        return real(faces[:2] + faces[3:] if len(calls) == 1 else faces, *args, **kwargs)
+
+    monkeypatch.setattr(build_mod, "assemble", first_without_side_2)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert calls == [6, 2 + 4 * 8]  # the four sides around side 2 as their 8 triangles each
+    assert res.to_report()["not_built"] == [0, 1, 4, 5] and not res.faceted_model
+    assert all("free edges" in res.faces[a]["reason"] for a in (0, 1, 4, 5))
+    assert "free edges" in res.message
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
+
+
+def _centroid(face) -> np.ndarray:
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    c = props.CentreOfMass()
+    return np.array([c.X(), c.Y(), c.Z()])
+
+
 def test_invalid_model_without_a_segment_to_blame_is_written_faceted(monkeypatch):
     import igl_heatseg.cad.build as build_mod
 

@@ -31,9 +31,13 @@ from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
+from OCP.collections import (  # noqa: E402
+    IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as _AncestorMap,
+)
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
-from OCP.TopAbs import TopAbs_FACE  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
+from OCP.TopExp import TopExp  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
@@ -82,7 +86,9 @@ MOVE_EDGE_FRACTION = 0.5
 SEW_MAX_EDGE = 0.5
 
 #: Rebuilds with the segments whose sewn faces fail BRepCheck faceted, before the whole model
-#: is faceted (an invalid face can hang OCC's mesher, and a CAD program reading the file).
+#: is faceted (an invalid face can hang OCC's mesher, and a CAD program reading the file);
+#: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
+#: (when the last one leaves free edges, the shell is written as it is).
 MAX_REBUILDS = 2
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
@@ -571,6 +577,14 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             bad = _invalid_segments(shape, faces, owner, status, neighbours)
+            if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
+                gaps = _open_segments(shape, faces, owner, status, neighbours)
+                if gaps:
+                    logger.warning("the shell keeps %d free edge(s) along segments %s; "
+                                   "faceting them", info["free_edges_after_sewing"],
+                                   sorted(gaps))
+                    skip.update({a: "free edges after sewing" for a in gaps})
+                    continue
             if bad == []:
                 break
             if bad is None or attempt == MAX_REBUILDS:
@@ -582,9 +596,12 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
         sew_tol = info["sew_tol"]
         message = "" if info["solid"] or not closed else "closed mesh but the shell is open"
-        if skip:
-            message = (message + "; " if message else "") + (
-                f"{len(skip)} face(s) faceted after failing BRepCheck in the sewn shell")
+        for why, what in (("invalid after sewing (BRepCheck)", "failing BRepCheck"),
+                          ("free edges after sewing", "leaving free edges")):
+            n = sum(r == why for r in skip.values())
+            if n:
+                message = (message + "; " if message else "") + (
+                    f"{n} face(s) faceted after {what} in the sewn shell")
         faceted_model = False
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
         if isinstance(exc, _InvalidBRep):
@@ -640,18 +657,45 @@ def _invalid_segments(shape, faces, owner, status, neighbours=None):
     surf = [BRep_Tool.Surface_s(f) for f in faces]  # sewing and fixing keep the surfaces
     bad = set()
     for f in bad_faces:
-        s = BRep_Tool.Surface_s(f)
-        hit = [owner[j] for j, t in enumerate(surf) if t == s]
-        if not hit:
+        who = _blame(f, surf, owner, status, neighbours)
+        if who is None:
             return None
-        if status[hit[0]]["status"] == "built":
-            bad.add(hit[0])
-            continue
-        near = {b for b in (neighbours or {}).get(hit[0], ()) if status[b]["status"] == "built"}
-        if not near:
-            return None
-        bad |= near
+        bad |= who
     return bad or None
+
+
+def _blame(f, surf, owner, status, neighbours):
+    """Built segments accountable for a face of a sewn shape: its own segment when built,
+    else (a triangle of a faceted segment) the built segments next to it; None when no built
+    segment accounts for it."""
+    s = BRep_Tool.Surface_s(f)
+    hit = [owner[j] for j, t in enumerate(surf) if t == s]
+    if not hit:
+        return None
+    if status[hit[0]]["status"] == "built":
+        return {hit[0]}
+    near = {b for b in (neighbours or {}).get(hit[0], ()) if status[b]["status"] == "built"}
+    return near or None
+
+
+def _open_segments(shape, faces, owner, status, neighbours) -> set:
+    """Built segments along the free edges of a sewn shape (edges of one face only, seams
+    and degenerate edges excluded), found as :func:`_blame` finds them; empty when none is
+    accountable."""
+    amap = _AncestorMap()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
+    surf = [BRep_Tool.Surface_s(f) for f in faces]
+    out: set = set()
+    for i in range(1, amap.Extent() + 1):
+        ancestors = amap.FindFromIndex(i)
+        edge = TopoDS.Edge(amap.FindKey(i))
+        if ancestors.Extent() != 1 or BRep_Tool.Degenerated_s(edge):
+            continue
+        face = TopoDS.Face(ancestors.First())
+        if BRep_Tool.IsClosed_s(edge, face):  # a seam of a periodic face
+            continue
+        out |= _blame(face, surf, owner, status, neighbours) or set()
+    return out
 
 
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):

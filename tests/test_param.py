@@ -3,6 +3,8 @@ fallbacks, distortion."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -515,3 +517,68 @@ def test_split_for_distortion_halves_a_chart_without_interior_vertices():
     assert pieces is not None and len(pieces) == 2
     assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
     assert all(chart_topology(F[p]).is_disk for p in pieces)
+
+
+def _strip(n: int = 40, w: int = 2):
+    """A flat n x w strip of unit squares (two triangles each), as 3D points and faces."""
+    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(w + 1.0))
+    V = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], 1)
+    i = np.arange((w + 1) * (n + 1)).reshape(w + 1, n + 1)[:-1, :-1].ravel()
+    F = np.concatenate([np.stack([i, i + 1, i + n + 2], 1), np.stack([i, i + n + 2, i + n + 1], 1)])
+    return V, F
+
+
+def test_long_chart_of_any_size_is_cut_for_packing_into_pieces_no_longer_than_the_bound():
+    """A strip too small for the aspect-ratio rule is still cut when it is longer than the
+    bound (a long chart sets the side of a square atlas); the bound is in 3D units, whatever
+    the scale of the map."""
+    from igl_heatseg.parameterization.cut import chart_topology, cut_to_disk
+    from igl_heatseg.parameterization.split import cut_for_packing, split_for_packing
+
+    V, F = _strip(40, 2)
+    UV = V[:, :2]
+    assert split_for_packing(UV, F, big=False) is None
+    for bound in (7.0, 12.0, 25.0):
+        pieces = split_for_packing(UV, F, big=False, max_length=bound)
+        assert len(pieces) == int(np.ceil(40 / bound))
+        assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
+        for p in pieces:
+            assert chart_topology(F[p]).is_disk
+            assert np.ptp(UV[np.unique(F[p]), 0]) <= bound + 1  # one column of slack
+    res = cut_to_disk(V, F)
+    param = parameterize_chart(res.V, res.F)
+    scaled = dataclasses.replace(param, UV=param.UV * 1e3)
+    for q in (param, scaled):
+        out = cut_for_packing(res, q, max_length=12.0, big=False)
+        assert len(out) == 4 and all(piece.bijective for _, _, piece in out)
+
+
+def test_cad_gets_the_map_of_a_chart_cut_for_packing_put_together_again():
+    """Pieces cut for packing keep their chart's map: CAD's freeform fit gets that map whole;
+    pieces mapped separately (cut for distortion) give no chart."""
+    from igl_heatseg.cad.segments import chart_uvs
+    from igl_heatseg.parameterization.cut import cut_to_disk
+    from igl_heatseg.parameterization.split import cut_for_packing, restrict_cut
+    from igl_heatseg.pipeline.results import Chart
+    from igl_heatseg.surfaces.model import Surface
+
+    V, F = _strip(40, 2)
+    res = cut_to_disk(V, F)
+    param = parameterize_chart(res.V, res.F)
+    out = cut_for_packing(res, param, max_length=12.0, big=False)
+    charts = [Chart(id=i, segment=0, faces=rows, split_from=0, cut=sub, param=q)
+              for i, (rows, sub, q) in enumerate(out)]
+    free = [Surface("freeform", {"centroid": V.mean(axis=0)})]
+    ids, UV = chart_uvs(np.zeros(len(F), np.int64), free, charts)[0]
+    used = np.unique(res.F)
+    order = np.argsort(res.vertex_map[used])
+    assert np.array_equal(ids, res.vertex_map[used][order])
+    assert np.array_equal(UV, param.UV[used][order])
+    # two halves with maps of their own: no chart for the segment
+    half = V[F].mean(axis=1)[:, 0] < 20
+    own = []
+    for rows in (np.flatnonzero(half), np.flatnonzero(~half)):
+        sub = restrict_cut(res, rows)
+        own.append(Chart(id=len(own), segment=0, faces=rows, split_from=0, cut=sub,
+                         param=parameterize_chart(sub.V, sub.F)))
+    assert chart_uvs(np.zeros(len(F), np.int64), free, own) is None

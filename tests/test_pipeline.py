@@ -9,10 +9,10 @@ import igl
 import numpy as np
 import pytest
 
-from igl_heatseg.mesh.checks import validate_mesh
-from igl_heatseg.errors import MeshError
 from igl_heatseg.cli.run import parse_cut_path, register, write_pictures
+from igl_heatseg.errors import MeshError
 from igl_heatseg.io import write_run
+from igl_heatseg.mesh.checks import validate_mesh
 from igl_heatseg.pipeline import run_pipeline
 
 NU, NV, NR = 64, 8, 4
@@ -67,14 +67,19 @@ def can_mesh():
 
 
 def side_chart(res):
-    sizes = [c.report["faces"] for c in res.charts]
-    return res.charts[int(np.argmax(sizes))]
+    """The side's chart (the only annulus), or one of its pieces when it was cut for
+    packing."""
+    return next(c for c in res.charts if c.report["topology"]["boundary_loops"] == 2)
 
 
 def test_can_auto(can_mesh, tmp_path):
     res = run_pipeline(can_mesh)
     write_run(tmp_path, res)
-    assert len(res.charts) == 3
+    # the side and two caps; the side (2 pi x 2, longer than PACK_MAX_LENGTH x the square
+    # root of the can's area) is then cut across for packing, its map kept
+    assert len([c for c in res.charts if c.split_from is None]) == 2
+    assert len({c.split_from for c in res.charts if c.split_from is not None}) == 1
+    assert res.charts_cut_for_packing == 1
     side = side_chart(res)
     topo = side.report["topology"]
     assert (topo["components"], topo["euler"], topo["boundary_loops"]) == (1, 0, 2)
@@ -83,17 +88,18 @@ def test_can_auto(can_mesh, tmp_path):
     for ch in res.charts:
         assert ch.report["parameterized"] and ch.report["bijective"], ch.report
         assert ch.cut.topology_after.is_disk
-    # the side unrolls into a rectangle 2*pi*R x H (up to the polygon's perimeter)
-    uv = side.param.UV
+    # the side unrolls into a rectangle 2*pi*R x H (up to the polygon's perimeter); its
+    # pieces keep that map
+    pieces = [c for c in res.charts if c.split_from == side.split_from]
+    uv = np.vstack([c.param.UV[np.unique(c.cut.F)] for c in pieces])
     ext = np.sort(np.ptp(uv - uv.mean(0), axis=0))
     perimeter = NU * 2 * RADIUS * np.sin(np.pi / NU)
-    d = side.param.distortion
-    assert d["sym_dirichlet"] < 4.05
+    assert all(c.param.distortion["sym_dirichlet"] < 4.05 for c in pieces)
     assert np.prod(ext) == pytest.approx(perimeter * HEIGHT, rel=0.05)
 
     # files
     rep = json.loads((tmp_path / "report.json").read_text())
-    assert len(rep["charts"]) == 3
+    assert len(rep["charts"]) == len(res.charts)
     for key in (
         "id",
         "faces",
@@ -108,7 +114,8 @@ def test_can_auto(can_mesh, tmp_path):
         "seconds",
     ):
         assert key in rep["charts"][0]
-    assert rep["parameterization"]["charts_bijective"] == 3
+    assert rep["parameterization"]["charts_bijective"] == len(res.charts)
+    assert rep["parameterization"]["charts_cut_for_packing"] == 1
     assert (tmp_path / "labels.txt").exists()
     V2, TC, _, F2, FTC, _ = igl.readOBJ(str(tmp_path / "atlas.obj"))
     np.testing.assert_array_equal(F2, can_mesh.F)
@@ -129,10 +136,13 @@ def test_chart_topology_in_the_report_is_the_chart_s_own(can_mesh):
     from igl_heatseg.parameterization.cut import chart_topology
 
     auto = run_pipeline(can_mesh)
-    first = run_pipeline(can_mesh, cut="none")  # computed before cutting
-    for a, b in zip(auto.charts, first.charts, strict=True):
-        assert a.report["topology"] == chart_topology(can_mesh.F[a.faces]).as_dict()
-        assert a.report["topology"] == b.report["topology"]
+    first = run_pipeline(can_mesh, cut="none")  # computed before cutting (and not packed)
+    assert len(first.charts) == 3 and len(auto.charts) > 3  # the side cut for packing
+    for b in first.charts:  # a piece reports the topology of the chart it was cut from
+        mine = [a for a in auto.charts if a.segment == b.segment]
+        faces = np.sort(np.concatenate([a.faces for a in mine]))
+        assert b.report["topology"] == chart_topology(can_mesh.F[faces]).as_dict()
+        assert all(a.report["topology"] == b.report["topology"] for a in mine)
 
 
 def test_hlle_skip_can_be_turned_off(can_mesh):
@@ -328,3 +338,22 @@ def test_mesh_mean_energy_is_brought_under_its_bound(monkeypatch):
     pieces, sd_mesh = mapped()
     assert len(pieces) >= 2 and all(c.param.bijective for c in pieces)
     assert sd_mesh <= MESH_SD_MAX
+
+
+def test_long_chart_is_cut_for_packing_only_when_the_atlas_packs_tighter():
+    """A flat round disk alone is longer than the bound, but its quarters pack no tighter
+    than the disk: it stays one chart; the can's side is cut (fill measured both ways)."""
+    from igl_heatseg.parameterization.split import PACK_MAX_LENGTH, split_for_packing
+
+    r, t = np.meshgrid(np.linspace(0, 1, 9)[1:], np.linspace(0, 2 * np.pi, 48, endpoint=False))
+    P = np.r_[[[0.0, 0.0]], np.c_[(r * np.cos(t)).ravel(), (r * np.sin(t)).ravel()]]
+    V = np.c_[P, np.zeros(len(P))]
+    from scipy.spatial import Delaunay
+
+    F = Delaunay(P).simplices.astype(np.int64)  # the disk's triangles, counter-clockwise
+    disk = validate_mesh(V, F, "disk")
+    area = 24 * np.sin(2 * np.pi / 48)  # the 48-gon's
+    assert split_for_packing(P, F, big=False, max_length=PACK_MAX_LENGTH * np.sqrt(area))
+    res = run_pipeline(disk)
+    assert len(res.charts) == 1 and res.charts_cut_for_packing == 0
+    assert res.atlas.fill > 0.7

@@ -64,38 +64,63 @@ def fit_segment_surfaces(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
 def chart_uvs(labels: np.ndarray, surfaces, charts) -> list:
     """The ``uv`` argument of :func:`~igl_heatseg.cad.build.build_brep` from pipeline charts.
 
-    A segment gets its chart's UV when it is freeform, is exactly one chart, that chart was
-    not cut (one UV per mesh vertex) and its map is certified bijective; else ``None`` (the
-    build then makes its own harmonic chart for a disk).
+    A segment gets its chart's UV when it is freeform, its map is certified bijective and one
+    UV per mesh vertex (the chart was not cut open).  Its chart is one chart, or the pieces of
+    one chart cut for packing (:func:`igl_heatseg.parameterization.split.cut_for_packing`):
+    they keep their chart's map, which is put together again.  Else ``None`` (the build then
+    makes its own harmonic chart for a disk).
 
     Parameters
     ----------
     labels : (m,) int64
     surfaces : list of Surface
     charts : iterable
-        :class:`igl_heatseg.pipeline.Chart` objects (``segment``, ``cut.F``,
-        ``cut.vertex_map``, ``param.UV``, ``param.bijective``).
+        :class:`igl_heatseg.pipeline.Chart` objects (``segment``, ``split_from``, ``cut.F``,
+        ``cut.vertex_map``, ``param.UV``, ``param.bijective``, ``param.attempts``).
 
     Returns
     -------
     list of (ids (p,) int64, UV (p, 2) float64) or None, length k
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> cut = NS(F=np.array([[0, 1, 2]]), vertex_map=np.array([4, 5, 6]))
+    >>> ch = NS(segment=0, split_from=None, cut=cut,
+    ...         param=NS(UV=np.eye(3)[:, :2], bijective=True, attempts=[]))
+    >>> free = Surface("freeform", {"centroid": np.zeros(3)})
+    >>> ids, UV = chart_uvs(np.zeros(1, np.int64), [free], [ch])[0]
+    >>> ids.tolist(), UV.tolist()
+    ([4, 5, 6], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
     """
     k = len(surfaces)
-    charts = list(charts or [])
-    per_segment = np.bincount([c.segment for c in charts], minlength=k) if charts else \
-        np.zeros(k, np.int64)
+    by_segment: dict = {}
+    for c in charts or []:
+        by_segment.setdefault(int(c.segment), []).append(c)
     uv: list = [None] * k
-    for c in charts:
-        a = int(c.segment)
-        if a >= k or surfaces[a].is_analytic or per_segment[a] != 1:
+    for a, cs in by_segment.items():
+        if a >= k or surfaces[a].is_analytic:
             continue
-        if c.cut is None or c.param is None or not bool(c.param.bijective):
+        if len(cs) > 1 and not _pieces_of_one_map(cs):
             continue
-        used = np.unique(np.asarray(c.cut.F))
-        ids = np.asarray(c.cut.vertex_map, dtype=np.int64)[used]
-        if len(np.unique(ids)) != len(ids):  # cut open: a mesh vertex has several UVs
+        if any(c.cut is None or c.param is None or not bool(c.param.bijective) for c in cs):
             continue
-        UV = np.asarray(c.param.UV, dtype=np.float64)[used]
+        ids, UV = [], []
+        for c in cs:
+            used = np.unique(np.asarray(c.cut.F))
+            ids.append(np.asarray(c.cut.vertex_map, dtype=np.int64)[used])
+            UV.append(np.asarray(c.param.UV, dtype=np.float64)[used])
+        ids, UV = np.concatenate(ids), np.concatenate(UV)
+        uniq, first, inverse = np.unique(ids, return_index=True, return_inverse=True)
+        if not np.array_equal(UV, UV[first][inverse]):  # cut open: a vertex has several UVs
+            continue
         if np.all(np.isfinite(UV)):
-            uv[a] = (ids, UV)
+            uv[a] = (uniq, UV[first])
     return uv if any(x is not None for x in uv) else None
+
+
+def _pieces_of_one_map(charts) -> bool:
+    """Whether the charts are pieces of one chart cut for packing (its map restricted)."""
+    return len({c.split_from for c in charts}) == 1 and charts[0].split_from is not None and all(
+        c.param is not None and c.param.attempts
+        and c.param.attempts[-1].get("method") == "cut for packing" for c in charts)

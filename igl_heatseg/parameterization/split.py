@@ -53,6 +53,8 @@ __all__ = [
     "PACK_PIECE_ASPECT",
     "PACK_MIN_BOX_FILL",
     "PACK_MIN_AREA_FRACTION",
+    "PACK_MAX_LENGTH",
+    "PACK_LONG_GAIN",
 ]
 
 log = logging.getLogger(__name__)
@@ -405,22 +407,30 @@ PACK_PIECE_ASPECT: float = 2.0
 #: A chart filling less than this of its minimum-area rectangle is halved for packing.
 PACK_MIN_BOX_FILL: float = 0.45
 
-#: Only charts at least this fraction of the mesh's area are cut for packing (small strips
-#: pack well among the other charts).
+#: Only charts at least this fraction of the mesh's area are cut for their aspect ratio or
+#: their box fill (small strips pack well among the other charts) ...
 PACK_MIN_AREA_FRACTION: float = 0.1
+
+#: ... but a chart of any size longer than this times the square root of the mesh's area is
+#: cut across into pieces no longer than that (a square atlas filled to 70 % has sides of
+#: 1.2 times that root: a longer chart sets the side, or lies on the diagonal), when that
+#: helps (``igl_heatseg.pipeline.stages.parameterize_charts``).
+PACK_MAX_LENGTH: float = 0.7
+
+#: The pipeline keeps such cuts only when the atlas fills at least this much more of its
+#: square with them (both layouts are packed).
+PACK_LONG_GAIN: float = 0.01
 
 
 def _box(UV: np.ndarray, F: np.ndarray):
     """Minimum-area rectangle of a piece: rotated coordinates (all rows), min, extent, fill."""
-    from .atlas import min_area_rotation, rotate_points
+    from .atlas import _uv_area, min_area_rotation, rotate_points
 
     used = np.unique(F)
     Q = np.zeros((len(UV), 2))
     Q[used] = rotate_points(UV[used], min_area_rotation(UV[used]))
     lo, ext = Q[used].min(axis=0), np.ptp(Q[used], axis=0)
-    d1, d2 = UV[F[:, 1]] - UV[F[:, 0]], UV[F[:, 2]] - UV[F[:, 0]]
-    area = 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]).sum()
-    return Q, lo, ext, area / max(float(ext[0] * ext[1]), 1e-300)
+    return Q, lo, ext, _uv_area(UV, F) / max(float(ext[0] * ext[1]), 1e-300)
 
 
 def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int) -> list | None:
@@ -438,15 +448,24 @@ def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int) -> list | None:
 
 
 def split_for_packing(
-    UV: np.ndarray, F: np.ndarray, max_aspect: float = PACK_MAX_ASPECT, depth: int = 3
+    UV: np.ndarray,
+    F: np.ndarray,
+    max_aspect: float = PACK_MAX_ASPECT,
+    depth: int = 3,
+    *,
+    max_length: float = np.inf,
+    big: bool = True,
 ) -> list | None:
     """Cut a chart that packs badly into pieces that pack well, by straight cuts in the map.
 
-    A long chart (minimum-area rectangle more than ``max_aspect`` times as long as wide) is
-    cut across its length into pieces of aspect ratio about :data:`PACK_PIECE_ASPECT`; a chart
-    that fills less than :data:`PACK_MIN_BOX_FILL` of its rectangle (a C-shaped chart, e.g. a
-    ring cut open) is halved across its length, recursively (``depth`` levels), as long as
-    that helps.  Faces go to the piece holding their centroid (stray faces join a neighbour).
+    A chart longer than ``max_length`` (its minimum-area rectangle's long side) is cut across
+    into pieces no longer than that; a ``big`` chart more than ``max_aspect`` times as long as
+    wide, into pieces of aspect ratio about :data:`PACK_PIECE_ASPECT`; a ``big`` chart that
+    fills less than :data:`PACK_MIN_BOX_FILL` of its rectangle (a C-shaped chart, e.g. a ring
+    cut open) is halved across its length.  Pieces are cut again the same way (``depth``
+    levels), halves only as long as halving helps.  Faces go to the piece holding their
+    centroid (stray faces join a neighbour); a cut whose pieces are not all disks is not
+    made.
 
     Parameters
     ----------
@@ -455,9 +474,13 @@ def split_for_packing(
     F : (m, 3) int64
         Disk triangulation.
     max_aspect : float
-        Aspect ratio above which a chart is cut across.
+        Aspect ratio above which a big chart is cut across.
     depth : int
-        Halving levels for charts that fill their rectangle badly.
+        Levels of cutting pieces again.
+    max_length : float
+        Length (units of ``UV``) above which a chart of any size is cut across.
+    big : bool
+        Whether the aspect-ratio and box-fill rules apply (a chart large enough to matter).
 
     Returns
     -------
@@ -473,15 +496,30 @@ def split_for_packing(
     >>> F = np.concatenate([np.stack([i, i + 1, i + 22], 1), np.stack([i, i + 22, i + 21], 1)])
     >>> [len(p) for p in split_for_packing(UV, F)]
     [16, 16, 16, 16, 16]
+    >>> [len(p) for p in split_for_packing(UV, F, big=False, max_length=12.0)]
+    [40, 40]
+    >>> split_for_packing(UV, F, big=False) is None
+    True
     """
     F = np.asarray(F, dtype=np.int64)
     UV = np.asarray(UV, dtype=np.float64)
     Q, lo, ext, fill = _box(UV, F)
     if not ext.min() > 0:
         return None
-    if ext.max() > max_aspect * ext.min():
-        return _slices(F, Q, lo, ext, int(np.ceil(ext.max() / ext.min() / PACK_PIECE_ASPECT)))
-    if fill >= PACK_MIN_BOX_FILL or depth <= 0 or len(F) < 2 * SPLIT_MIN_FACES:
+    n = int(np.ceil(ext.max() / max_length)) if ext.max() > max_length else 1
+    if big and ext.max() > max_aspect * ext.min():
+        n = max(n, int(np.ceil(ext.max() / ext.min() / PACK_PIECE_ASPECT)))
+    pieces = _slices(F, Q, lo, ext, n) if n > 1 else None
+    if pieces is not None:
+        if depth <= 0:
+            return pieces
+        out = []
+        for p in pieces:  # a slice of a ring cut open may still fill its rectangle badly
+            sub = split_for_packing(UV, F[p], max_aspect, depth - 1, max_length=max_length,
+                                    big=big)
+            out += [p] if sub is None else [p[q] for q in sub]
+        return out
+    if not big or fill >= PACK_MIN_BOX_FILL or depth <= 0 or len(F) < 2 * SPLIT_MIN_FACES:
         return None
     halves = _slices(F, Q, lo, ext, 2)
     if halves is None or len(halves) < 2:
@@ -491,7 +529,11 @@ def split_for_packing(
         return None
     out = []
     for h, f in zip(halves, fills, strict=True):
-        sub = split_for_packing(UV, F[h], max_aspect, depth - 1) if f < PACK_MIN_BOX_FILL else None
+        sub = (
+            split_for_packing(UV, F[h], max_aspect, depth - 1, max_length=max_length, big=big)
+            if f < PACK_MIN_BOX_FILL
+            else None
+        )
         out += [h] if sub is None else [h[p] for p in sub]
     return out
 
@@ -518,7 +560,14 @@ def _merge_strays(F: np.ndarray, k: np.ndarray, rounds: int = 4) -> np.ndarray:
     return k
 
 
-def cut_for_packing(res: CutResult, param, name: str = "chart") -> list:
+def cut_for_packing(
+    res: CutResult,
+    param,
+    name: str = "chart",
+    *,
+    max_length: float = np.inf,
+    big: bool = True,
+) -> list:
     """Cut a long chart for packing, keeping its map (restricted to every piece).
 
     Parameters
@@ -529,6 +578,9 @@ def cut_for_packing(res: CutResult, param, name: str = "chart") -> list:
         Its (bijective) map, ``param.UV`` indexing ``res.V``.
     name : str
         Chart name for messages.
+    max_length, big
+        As for :func:`split_for_packing`, ``max_length`` in the units of ``res.V`` (the map is
+        measured at its true scale: UV area = 3D area).
 
     Returns
     -------
@@ -552,13 +604,15 @@ def cut_for_packing(res: CutResult, param, name: str = "chart") -> list:
     """
     import dataclasses
 
+    from .atlas import _uv_area
     from .bijectivity import certify_map
     from .distortion import distortion
 
     whole = [(np.arange(len(res.F)), res, param)]
     if not param.bijective:
         return whole
-    pieces = split_for_packing(param.UV, res.F)
+    scale = np.sqrt(_area(res) / max(_uv_area(param.UV, res.F), 1e-300))  # 3D per UV length
+    pieces = split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)
     if pieces is None:
         return whole
     out = []

@@ -29,6 +29,8 @@ from ..parameterization.cut import (
 )
 from ..parameterization.split import (
     MESH_SD_MAX,
+    PACK_LONG_GAIN,
+    PACK_MAX_LENGTH,
     PACK_MIN_AREA_FRACTION,
     SPLIT_SD_MAX,
     cut_for_packing,
@@ -330,8 +332,9 @@ def map_chart(
     through :func:`igl_heatseg.parameterization.split.parameterize_pieces` (split along a seam
     of highest stretch while the best bijective map's mean symmetric Dirichlet energy is above
     ``split_sd_max``); a piece of at least ``PACK_MIN_AREA_FRACTION`` of the mesh's area is cut
-    across for packing (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping
-    its map.  A failure is recorded in ``ch.error``, not raised.
+    for packing when it is long or C-shaped
+    (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping its map.  A failure
+    is recorded in ``ch.error``, not raised.
 
     Parameters
     ----------
@@ -387,7 +390,7 @@ def map_chart(
         ch.error = f"parameterization failed: {exc}"
         return [ch], False, False
     n_dist = len(pieces)
-    pieces = [  # long charts cut across for packing, their maps kept
+    pieces = [  # long or C-shaped big charts cut for packing, their maps kept
         (rows[sub_rows], sub, q)
         for rows, r, p in pieces
         for sub_rows, sub, q in (
@@ -448,6 +451,13 @@ def parameterize_charts(
         In order, pieces in place of the chart they come from, renumbered ``0, 1, ...``.
     cut_for_distortion, cut_for_packing : int
         How many charts were split for either reason.
+
+    Notes
+    -----
+    Charts longer than ``PACK_MAX_LENGTH`` times the square root of the mesh's area are then
+    cut across, their maps kept, when the atlas packs tighter that way (both layouts are
+    packed: a long chart sets the side of a square atlas, but a mesh of one round chart gains
+    nothing from quarters).
     """
     progress = progress or (lambda stage, fraction=1.0: None)
     areas = face_areas(mesh.V, mesh.F) if areas is None else areas
@@ -460,10 +470,65 @@ def parameterize_charts(
     progress("param", 1.0)
     if split_sd_max > MESH_SD_MAX:
         _lower_mesh_energy(done, mesh, areas, opts)
+    _cut_long_charts(done, areas)
     out = [c for _, pieces, _, _ in done for c in pieces]
     for i, c in enumerate(out):
         c.id = i
     return out, sum(d for *_, d, _ in done), sum(p for *_, p in done)
+
+
+def _packable(charts: list) -> list:
+    """The mapped charts :func:`pack` packs (finite UVs of positive area)."""
+    return [
+        ch
+        for ch in charts
+        if ch.param is not None
+        and np.isfinite(ch.param.UV).all()
+        and _uv_area(ch.param.UV, ch.cut.F) > 0
+    ]
+
+
+def _fill(charts: list) -> float:
+    """Atlas fill of :func:`pack`'s layout of ``charts`` (0 when none can be packed)."""
+    done = _packable(charts)
+    if not done:
+        return 0.0
+    return pack_charts(
+        [ch.param.UV for ch in done], [ch.cut.F for ch in done], areas=[ch.area for ch in done]
+    ).fill
+
+
+def _cut_long_charts(done: list, areas: np.ndarray) -> None:
+    """Cut the charts longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's area
+    across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`, maps kept), in place
+    in ``done`` (``(orig, pieces, cut_for_distortion, cut_for_packing)`` per chart), when the
+    atlas then fills at least ``PACK_LONG_GAIN`` more of its square."""
+    bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
+    new = []
+    for orig, pieces, _, _ in done:
+        out = []
+        for c in pieces:
+            cut = [(np.arange(len(c.faces)), c.cut, c.param)]
+            if c.param is not None and c.param.bijective:
+                cut = cut_for_packing(c.cut, c.param, f"chart {orig.id}", max_length=bound,
+                                      big=False)
+            out += [c] if len(cut) == 1 else [
+                replace(c, id=-1, faces=c.faces[rows], area=float(areas[c.faces[rows]].sum()),
+                        cut=sub, param=q, split_from=orig.id,
+                        chart_cut=c.chart_cut if c.split_from is not None else c.cut)
+                for rows, sub, q in cut]
+        new.append(out)
+    if all(len(out) == len(d[1]) for out, d in zip(new, done, strict=True)):
+        return
+    before = _fill([c for d in done for c in d[1]])
+    after = _fill([c for out in new for c in out])
+    log.info("long charts cut for packing: fill %.3f -> %.3f%s", before, after,
+             "" if after >= before + PACK_LONG_GAIN else " (not kept)")
+    if after < before + PACK_LONG_GAIN:
+        return
+    for i, out in enumerate(new):
+        if len(out) != len(done[i][1]):
+            done[i] = (done[i][0], out, done[i][2], True)
 
 
 def _excess(pieces: list, signed: bool = False) -> float:

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import MeshError
+from ..mesh.geometry import uv_areas
 from .outline_pack import OUTLINE_MAX_CHARTS, pack_outlines, rotate_points
 
 __all__ = [
@@ -94,9 +95,7 @@ class PackedAtlas:
 
 
 def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
-    a = UV[F[:, 1]] - UV[F[:, 0]]
-    b = UV[F[:, 2]] - UV[F[:, 0]]
-    return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
+    return float(np.abs(uv_areas(UV, F)).sum())
 
 
 #: Directions of the Akl-Toussaint filter in :func:`convex_hull` (points strictly inside the

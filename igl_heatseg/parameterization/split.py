@@ -35,6 +35,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.csgraph import dijkstra as sp_dijkstra
 
+from ..mesh.geometry import face_areas, uv_areas
 from ..mesh.topology import boundary_loops, edge_topology, face_adjacency, face_components
 from .cut import CutResult, chart_topology
 from .distortion import face_sym_dirichlet
@@ -389,11 +390,7 @@ def parameterize_pieces(
 
 
 def _area(res: CutResult) -> float:
-    V, F = res.V, res.F
-    return float(
-        0.5
-        * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
-    )
+    return float(face_areas(res.V, res.F).sum())
 
 
 #: A chart whose map's minimum-area rectangle is longer than this times its width, and whose
@@ -424,13 +421,14 @@ PACK_LONG_GAIN: float = 0.01
 
 def _box(UV: np.ndarray, F: np.ndarray):
     """Minimum-area rectangle of a piece: rotated coordinates (all rows), min, extent, fill."""
-    from .atlas import _uv_area, min_area_rotation, rotate_points
+    from .atlas import min_area_rotation, rotate_points
 
     used = np.unique(F)
     Q = np.zeros((len(UV), 2))
     Q[used] = rotate_points(UV[used], min_area_rotation(UV[used]))
     lo, ext = Q[used].min(axis=0), np.ptp(Q[used], axis=0)
-    return Q, lo, ext, _uv_area(UV, F) / max(float(ext[0] * ext[1]), 1e-300)
+    area = float(np.abs(uv_areas(UV, F)).sum())
+    return Q, lo, ext, area / max(float(ext[0] * ext[1]), 1e-300)
 
 
 def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int) -> list | None:
@@ -604,14 +602,14 @@ def cut_for_packing(
     """
     import dataclasses
 
-    from .atlas import _uv_area
     from .bijectivity import certify_map
     from .distortion import distortion
 
     whole = [(np.arange(len(res.F)), res, param)]
     if not param.bijective:
         return whole
-    scale = np.sqrt(_area(res) / max(_uv_area(param.UV, res.F), 1e-300))  # 3D per UV length
+    uv_area = float(np.abs(uv_areas(param.UV, res.F)).sum())
+    scale = np.sqrt(_area(res) / max(uv_area, 1e-300))  # 3D length per UV length
     pieces = split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)
     if pieces is None:
         return whole

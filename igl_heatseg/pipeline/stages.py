@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..mesh.checks import CleanMesh
-from ..mesh.geometry import face_areas
+from ..mesh.geometry import face_areas, uv_areas
 from ..mesh.topology import face_components
 from ..parameterization.atlas import PackedAtlas, atlas_corner_uv, pack_charts
 from ..parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
@@ -53,9 +53,7 @@ log = logging.getLogger(__name__)
 
 
 def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
-    a = UV[F[:, 1]] - UV[F[:, 0]]
-    b = UV[F[:, 2]] - UV[F[:, 0]]
-    return float(np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / 2)
+    return float(np.abs(uv_areas(UV, F)).sum())
 
 
 def check_cut_paths(mesh: CleanMesh, cut_paths: Sequence[tuple[int, int]]) -> None:

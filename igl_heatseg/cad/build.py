@@ -88,7 +88,7 @@ SEW_MAX_EDGE = 0.5
 #: Rebuilds with the segments whose sewn faces fail BRepCheck faceted, before the whole model
 #: is faceted (an invalid face can hang OCC's mesher, and a CAD program reading the file);
 #: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
-#: (when the last one leaves free edges, the shell is written as it is).
+#: (when that does not give a valid solid, the first open shell is written).
 MAX_REBUILDS = 2
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
@@ -535,8 +535,10 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     CadResult
         Never raises for geometry it cannot build: such faces are faceted and reported. A
         segment whose face fails BRepCheck once sewn (in memory, or read back from STEP) is
-        faceted and the model rebuilt (up to MAX_REBUILDS times); a failed build, or a model
-        still invalid, returns the fully faceted model (``faceted_model=True``).
+        faceted and the model rebuilt (up to MAX_REBUILDS times), as are the built segments
+        along the free edges of a closed mesh's open shell (kept when that gives a valid solid,
+        else the first open shell is returned); a failed build, or a model still invalid,
+        returns the fully faceted model (``faceted_model=True``).
 
     Raises
     ------
@@ -567,6 +569,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     skip: dict = {}  # segments faceted because their sewn face failed BRepCheck
     cache: dict = {}
     neighbours = _segment_neighbours(F, labels, len(surfaces))
+    kept = None  # the first valid open shell, kept in case faceting does not close it
     try:
         for attempt in range(MAX_REBUILDS + 1):
             faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
@@ -583,8 +586,15 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                     logger.warning("the shell keeps %d free edge(s) along segments %s; "
                                    "faceting them", info["free_edges_after_sewing"],
                                    sorted(gaps))
+                    kept = kept or (shape, info, status, dict(skip))
                     skip.update({a: "free edges after sewing" for a in gaps})
                     continue
+            invalid_at_last = bad is None or (bad != [] and attempt == MAX_REBUILDS)
+            if kept is not None and (invalid_at_last or (bad == [] and not info["solid"])):
+                logger.warning("faceting along the free edges did not make a valid solid; "
+                               "keeping the open shell")
+                shape, info, status, skip = kept
+                break
             if bad == []:
                 break
             if bad is None or attempt == MAX_REBUILDS:

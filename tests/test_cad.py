@@ -427,33 +427,36 @@ def test_free_edges_of_a_closed_mesh_facet_their_segments_and_rebuild(monkeypatc
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
 
 
-def test_open_shell_is_kept_when_faceting_along_its_free_edges_does_not_mend_it(monkeypatch):
+@pytest.mark.parametrize("after", ["invalid", "open"])
+def test_open_shell_is_kept_when_faceting_along_its_free_edges_does_not_mend_it(
+    monkeypatch, after
+):
     """Faceting the segments along the free edges is undone when the rebuilt model is invalid
     or still open: the first open shell (more faces built) is written, not the faceted
     model."""
     import igl_heatseg.cad.build as build_mod
 
     real_assemble, real_invalid = build_mod.assemble, build_mod._invalid_segments
+    calls = []
+
+    def without_side_2(faces, *args, **kwargs):
+        calls.append(len(faces))
+        keep = faces[:2] + faces[3:] if len(calls) == 1 or after == "open" else faces
+        return real_assemble(keep, *args, **kwargs)
+
+    def invalid_after_the_rebuild(shape, faces, *args):
+        if len(calls) > 1 and after == "invalid":
+            return None
+        return real_invalid(shape, faces, *args)
+
+    monkeypatch.setattr(build_mod, "assemble", without_side_2)
+    monkeypatch.setattr(build_mod, "_invalid_segments", invalid_after_the_rebuild)
     V, F, labels = box_mesh(2)
-    for after in ("invalid", "open"):
-        calls = []
-
-        def without_side_2(faces, *args, **kwargs):
-            calls.append(len(faces))
-            keep = faces[:2] + faces[3:] if len(calls) == 1 or after == "open" else faces
-            return real_assemble(keep, *args, **kwargs)
-
-        def invalid_after_the_rebuild(shape, faces, *args):
-            return None if len(calls) > 1 and after == "invalid" else real_invalid(
-                shape, faces, *args)
-
-        monkeypatch.setattr(build_mod, "assemble", without_side_2)
-        monkeypatch.setattr(build_mod, "_invalid_segments", invalid_after_the_rebuild)
-        res = build_brep(V, F, labels, box_planes())
-        assert len(calls) >= 2 and not res.faceted_model, after
-        assert res.to_report()["not_built"] == [], after  # the first shell: every face built
-        assert res.fidelity["valid"] and res.fidelity["solids"] == 0, after
-        assert "shell is open" in res.message, after
+    res = build_brep(V, F, labels, box_planes())
+    assert len(calls) >= 2 and not res.faceted_model
+    assert res.to_report()["not_built"] == []  # the first shell: every face built
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 0
+    assert "shell is open" in res.message
 
 
 def _centroid(face) -> np.ndarray:

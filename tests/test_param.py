@@ -582,3 +582,31 @@ def test_cad_gets_the_map_of_a_chart_cut_for_packing_put_together_again():
         own.append(Chart(id=len(own), segment=0, faces=rows, split_from=0, cut=sub,
                          param=parameterize_chart(sub.V, sub.F)))
     assert chart_uvs(np.zeros(len(F), np.int64), free, own) is None
+
+
+def test_split_for_distortion_finds_an_uneven_halving_when_no_even_one_is_a_disk():
+    """A coarse chart (36 faces, 2 interior vertices; a piece of a generated domed cap's
+    chart, its map rounded) that no straight line or grown piece halves evenly into two disks:
+    the evenest split into two disks is taken (before: none; the chart kept an energy of 16)."""
+    from igl_heatseg.parameterization.cut import chart_topology
+    from igl_heatseg.parameterization.split import split_for_distortion
+
+    F = np.array([0, 11, 10, 1, 12, 11, 2, 13, 12, 3, 14, 13, 4, 15, 14, 5, 16, 15, 6, 17, 16,
+                  6, 16, 5, 7, 18, 17, 7, 17, 6, 8, 22, 21, 16, 29, 28, 16, 17, 29, 19, 20, 25,
+                  18, 29, 17, 21, 25, 20, 15, 16, 28, 22, 26, 25, 22, 25, 21, 14, 15, 28, 23,
+                  26, 22, 13, 14, 28, 24, 26, 23, 32, 28, 27, 31, 27, 26, 31, 26, 24, 31, 32,
+                  27, 33, 13, 28, 33, 12, 13, 33, 28, 32, 30, 31, 24, 30, 24, 35, 34, 9, 10, 34,
+                  10, 11, 34, 11, 12, 34, 12, 33]).reshape(-1, 3)
+    UV = np.array([15.9, 0.0, 30.1, 3.9, 39.1, 9.5, 42.5, 13.0, 50.9, 23.6, 53.6, 33.5, 53.8,
+                   34.2, 54.1, 35.0, 27.5, 100.0, 12.6, 1.6, 13.9, 2.1, 22.9, 4.4, 31.8, 8.1,
+                   39.2, 13.2, 44.5, 19.9, 49.8, 29.3, 51.3, 40.4, 52.0, 40.7, 53.6, 44.5, 52.2,
+                   84.2, 51.7, 84.3, 51.2, 84.2, 38.6, 91.5, 37.4, 91.0, 36.7, 90.8, 50.5, 82.7,
+                   52.8, 74.1, 52.0, 64.8, 48.3, 55.5, 53.9, 52.8, 20.4, 95.6, 11.5, 95.3, 7.6,
+                   92.6, 4.2, 89.1, 0.0, 85.1, 34.8, 91.7]).reshape(-1, 2)
+    V = np.c_[UV, np.zeros(len(UV))]
+    assert chart_topology(F).is_disk
+    pieces = split_for_distortion(V, F, UV)
+    assert pieces is not None and len(pieces) == 2
+    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
+    assert all(chart_topology(F[p]).is_disk for p in pieces)
+    assert min(map(len, pieces)) >= 0.3 * len(F)

@@ -85,9 +85,9 @@ SPLIT_MIN_FACES: int = 20
 
 
 #: Directions of the straight cuts :func:`_halve` tries, and the shares of the faces the
-#: piece grown from one end of a direction may take.
+#: first piece may take (the evenest that gives two disks wins).
 HALVE_DIRECTIONS: int = 8
-HALVE_FRACTIONS: tuple = (0.5, 0.35, 0.65, 0.2, 0.8)
+HALVE_SHARES: tuple = tuple(np.linspace(0.1, 0.9, 33))
 
 
 def _seam(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> np.ndarray | None:
@@ -203,30 +203,26 @@ def split_for_distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list |
 
 def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
     """Two disks of about half the chart's faces each: on either side of a straight line
-    through the map (at the median of the face centroids, in one of
-    :data:`HALVE_DIRECTIONS` directions), else the faces nearest, over the faces' adjacency,
-    to the face at one end of a direction (a share of :data:`HALVE_FRACTIONS`) and the
-    rest.  The split of a chart too small, or with no interior vertex, for a seam (a coarse
-    export's chart, all of whose vertices lie on its boundary)."""
-    if len(F) < 2:
+    through the map (in one of :data:`HALVE_DIRECTIONS` directions), else the faces nearest,
+    over the faces' adjacency, to the face at one end of a direction and the rest; the most
+    even split of :data:`HALVE_SHARES` found.  The split of a chart too small, or with no
+    interior vertex, for a seam (a coarse export's chart, all of whose vertices lie on its
+    boundary)."""
+    m = len(F)
+    if m < 2:
         return None
     C = UV[F].mean(axis=1)
-    half = len(F) // 2
-    m = len(F)
     A = face_adjacency(F)
+    lines, grown = [], []
     for t in np.arange(HALVE_DIRECTIONS) * np.pi / HALVE_DIRECTIONS:
         x = C @ np.array([np.cos(t), np.sin(t)])
-        order = np.argsort(x, kind="stable")  # a straight cut across the map
-        pieces = [np.sort(order[:half]), np.sort(order[half:])]
-        if all(_is_disk(F[p]) for p in pieces):
-            return pieces
-    for t in np.arange(HALVE_DIRECTIONS) * np.pi / HALVE_DIRECTIONS:
-        x = C @ np.array([np.cos(t), np.sin(t)])
+        lines.append(np.argsort(x, kind="stable"))  # a straight cut across the map
         # the faces nearest (over the faces' adjacency) to the face at that end
         d = sp_dijkstra(A, directed=False, indices=int(np.argmin(x)), unweighted=True)
-        order = np.lexsort((x, d))
-        for frac in HALVE_FRACTIONS:
-            k = min(max(int(round(frac * m)), 1), m - 1)
+        grown.append(np.lexsort((x, d)))
+    shares = np.unique(np.clip(np.round(np.asarray(HALVE_SHARES) * m), 1, m - 1).astype(int))
+    for k in shares[np.argsort(np.abs(shares - m / 2), kind="stable")]:  # evenest first
+        for order in lines + grown:
             pieces = [np.sort(order[:k]), np.sort(order[k:])]
             if all(_is_disk(F[p]) for p in pieces):
                 return pieces

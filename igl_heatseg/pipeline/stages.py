@@ -487,7 +487,8 @@ def _packable(charts: list) -> list:
 
 
 def _fill(charts: list) -> float:
-    """Atlas fill of :func:`pack`'s layout of ``charts`` (0 when none can be packed)."""
+    """Atlas fill of :func:`pack`'s layout of ``charts`` with the default gutter (0 when none
+    can be packed)."""
     done = _packable(charts)
     if not done:
         return 0.0

@@ -84,9 +84,11 @@ SPLIT_CORE: float = 0.3
 SPLIT_MIN_FACES: int = 20
 
 
-#: Directions of the straight cuts :func:`_halve` tries, and the shares of the faces the
-#: first piece may take (the evenest that gives two disks wins).
+#: Directions of the straight cuts :func:`_halve` tries, the shares of the faces the piece
+#: grown from one end of a direction may take, and the shares of either kind of piece tried
+#: last (the evenest first) when none of those gives two disks.
 HALVE_DIRECTIONS: int = 8
+HALVE_FRACTIONS: tuple = (0.5, 0.35, 0.65, 0.2, 0.8)
 HALVE_SHARES: tuple = tuple(np.linspace(0.1, 0.9, 33))
 
 
@@ -203,11 +205,12 @@ def split_for_distortion(V: np.ndarray, F: np.ndarray, UV: np.ndarray) -> list |
 
 def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
     """Two disks of about half the chart's faces each: on either side of a straight line
-    through the map (in one of :data:`HALVE_DIRECTIONS` directions), else the faces nearest,
-    over the faces' adjacency, to the face at one end of a direction and the rest; the most
-    even split of :data:`HALVE_SHARES` found.  The split of a chart too small, or with no
-    interior vertex, for a seam (a coarse export's chart, all of whose vertices lie on its
-    boundary)."""
+    through the map (at the median of the face centroids, in one of
+    :data:`HALVE_DIRECTIONS` directions), else the faces nearest, over the faces' adjacency,
+    to the face at one end of a direction (a share of :data:`HALVE_FRACTIONS`) and the rest,
+    else the evenest split of either kind over :data:`HALVE_SHARES`.  The split of a chart
+    too small, or with no interior vertex, for a seam (a coarse export's chart, all of whose
+    vertices lie on its boundary)."""
     m = len(F)
     if m < 2:
         return None
@@ -220,12 +223,19 @@ def _halve(F: np.ndarray, UV: np.ndarray) -> list | None:
         # the faces nearest (over the faces' adjacency) to the face at that end
         d = sp_dijkstra(A, directed=False, indices=int(np.argmin(x)), unweighted=True)
         grown.append(np.lexsort((x, d)))
-    shares = np.unique(np.clip(np.round(np.asarray(HALVE_SHARES) * m), 1, m - 1).astype(int))
-    for k in shares[np.argsort(np.abs(shares - m / 2), kind="stable")]:  # evenest first
-        for order in lines + grown:
-            pieces = [np.sort(order[:k]), np.sort(order[k:])]
-            if all(_is_disk(F[p]) for p in pieces):
-                return pieces
+
+    def share(frac: float) -> int:
+        return min(max(int(round(frac * m)), 1), m - 1)
+
+    tries = [(order, m // 2) for order in lines]
+    tries += [(order, share(f)) for order in grown for f in HALVE_FRACTIONS]
+    ks = np.unique([share(f) for f in HALVE_SHARES])
+    tries += [(order, k) for k in ks[np.argsort(np.abs(ks - m / 2), kind="stable")]
+              for order in lines + grown]
+    for order, k in tries:
+        pieces = [np.sort(order[:k]), np.sort(order[k:])]
+        if all(_is_disk(F[p]) for p in pieces):
+            return pieces
     return None
 
 

@@ -566,7 +566,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
     closed = _is_closed(F)
     timings: dict = {}
-    skip: dict = {}  # segments faceted because their sewn face failed BRepCheck
+    skip: dict = {}  # segments faceted after sewing: failed BRepCheck, or along free edges
     cache: dict = {}
     neighbours = _segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it

@@ -171,7 +171,7 @@ def test_drawable_charts_skips_charts_without_a_map(box, box_charts):
     mesh, _ = box
     _, charts = box_charts
     bare = dataclasses.replace(charts[0], cut=None, param=None)  # a non-disk under cut="none"
-    assert [c.id for c in viz.drawable_charts([bare, *charts[1:]])] == [1, 2, 3, 4, 5]
+    assert [c.id for c in viz.drawable_charts([bare, *charts[1:]])] == list(range(1, len(charts)))
     assert viz.drawable_charts(None) == []
     UVc = viz.corner_uv(mesh.V, mesh.F, [bare, *charts[1:]]).reshape(-1, 3, 2)
     assert not UVc[charts[0].faces].any() and UVc[charts[1].faces].any()  # no map: blank
@@ -181,7 +181,7 @@ def test_corner_uv_matches_3d_area_and_layout_does_not_overlap(box, box_charts):
     mesh, _ = box
     seg, charts = box_charts
     cm = viz.drawable_charts(charts)
-    assert len(cm) == 6 and all(c.param.bijective for c in cm)
+    assert len(cm) == len(charts) >= 6 and all(c.param.bijective for c in cm)
     UVc = viz.corner_uv(mesh.V, mesh.F, cm).reshape(-1, 3, 2)
     a, b = UVc[:, 1] - UVc[:, 0], UVc[:, 2] - UVc[:, 0]
     a2 = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])

@@ -664,27 +664,35 @@ def _invalid_segments(shape, faces, owner, status, neighbours=None):
     bad_faces = _invalid_faces(shape)
     if not bad_faces:
         return bad_faces
-    surf = [BRep_Tool.Surface_s(f) for f in faces]  # sewing and fixing keep the surfaces
+    owners = _surface_owners(faces, owner)
     bad = set()
     for f in bad_faces:
-        who = _blame(f, surf, owner, status, neighbours)
+        who = _blame(f, owners, status, neighbours)
         if who is None:
             return None
         bad |= who
     return bad or None
 
 
-def _blame(f, surf, owner, status, neighbours):
-    """Built segments accountable for a face of a sewn shape: its own segment when built,
-    else (a triangle of a faceted segment) the built segments next to it; None when no built
-    segment accounts for it."""
-    s = BRep_Tool.Surface_s(f)
-    hit = [owner[j] for j, t in enumerate(surf) if t == s]
-    if not hit:
+def _surface_owners(faces, owner) -> dict:
+    """Surface -> segment of the built faces (sewing and fixing keep the surfaces; OCP gives
+    one Python object per surface, so the objects are the keys)."""
+    out: dict = {}
+    for f, a in zip(faces, owner, strict=True):
+        out.setdefault(BRep_Tool.Surface_s(f), a)
+    return out
+
+
+def _blame(f, owners, status, neighbours):
+    """Built segments accountable for a face of a sewn shape (``owners``:
+    :func:`_surface_owners`): its own segment when built, else (a triangle of a faceted
+    segment) the built segments next to it; None when no built segment accounts for it."""
+    a = owners.get(BRep_Tool.Surface_s(f))
+    if a is None:
         return None
-    if status[hit[0]]["status"] == "built":
-        return {hit[0]}
-    near = {b for b in (neighbours or {}).get(hit[0], ()) if status[b]["status"] == "built"}
+    if status[a]["status"] == "built":
+        return {a}
+    near = {b for b in (neighbours or {}).get(a, ()) if status[b]["status"] == "built"}
     return near or None
 
 
@@ -694,7 +702,7 @@ def _open_segments(shape, faces, owner, status, neighbours) -> set:
     accountable."""
     amap = _AncestorMap()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
-    surf = [BRep_Tool.Surface_s(f) for f in faces]
+    owners = _surface_owners(faces, owner)
     out: set = set()
     for i in range(1, amap.Extent() + 1):
         ancestors = amap.FindFromIndex(i)
@@ -704,7 +712,7 @@ def _open_segments(shape, faces, owner, status, neighbours) -> set:
         face = TopoDS.Face(ancestors.First())
         if BRep_Tool.IsClosed_s(edge, face):  # a seam of a periodic face
             continue
-        out |= _blame(face, surf, owner, status, neighbours) or set()
+        out |= _blame(face, owners, status, neighbours) or set()
     return out
 
 

@@ -295,9 +295,10 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
         out[grown] = r
         free[grown] = False
         r += 1
-        if good_rms is not None:
-            own = fit_faces(V, F, grown, tol, W=W, FN=FN) if own is None else own
-        if good_rms is not None and (not own.is_analytic or own.rms > good_rms * tol) and (
+        if good_rms is None:
+            continue
+        own = fit_faces(V, F, grown, tol, W=W, FN=FN) if own is None else own
+        if (not own.is_analytic or own.rms > good_rms * tol) and (
                 not noisy or _evidence(F, grown, own)):
             lost += area_of[grown].sum()
             if lost > lost_bar:  # the good regions can no longer hold SPLIT_GOOD_SHARE

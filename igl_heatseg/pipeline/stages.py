@@ -475,21 +475,15 @@ def parameterize_charts(
     return out, sum(d for *_, d, _ in done), sum(p for *_, p in done)
 
 
-def _packable(charts: list) -> list:
-    """The mapped charts :func:`pack` packs (finite UVs of positive area)."""
-    return [
-        ch
-        for ch in charts
-        if ch.param is not None
-        and np.isfinite(ch.param.UV).all()
-        and _uv_area(ch.param.UV, ch.cut.F) > 0
-    ]
+def _packable(ch: Chart) -> bool:
+    """Whether :func:`pack` packs a mapped chart (finite UVs of positive area)."""
+    return bool(np.isfinite(ch.param.UV).all() and _uv_area(ch.param.UV, ch.cut.F) > 0)
 
 
 def _fill(charts: list) -> float:
     """Atlas fill of :func:`pack`'s layout of ``charts`` with the default gutter (0 when none
     can be packed)."""
-    done = _packable(charts)
+    done = [ch for ch in charts if ch.param is not None and _packable(ch)]
     if not done:
         return 0.0
     return pack_charts(
@@ -599,8 +593,7 @@ def pack(
     for ch in charts:
         if ch.param is None:
             continue
-        UV = ch.param.UV
-        if np.isfinite(UV).all() and _uv_area(UV, ch.cut.F) > 0:
+        if _packable(ch):
             done.append(ch)
         else:  # a degenerate map (possible only when no fallback is used) cannot be packed
             ch.atlas_error = "degenerate or non-finite UVs; left out of the atlas"

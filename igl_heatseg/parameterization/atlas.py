@@ -94,10 +94,6 @@ class PackedAtlas:
     fill: float
 
 
-def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
-    return float(np.abs(uv_areas(UV, F)).sum())
-
-
 #: Directions of the Akl-Toussaint filter in :func:`convex_hull` (points strictly inside the
 #: polygon of the extreme points in these directions cannot be hull vertices).
 _HULL_DIRECTIONS = 32
@@ -366,7 +362,7 @@ def pack_charts(
             raise MeshError(f"chart {i}: UVs contain NaN or infinite values")
         P_list.append(UV)
         F_list.append(F.astype(np.int64))
-    uv_area = np.array([_uv_area(P, F) for P, F in zip(P_list, F_list, strict=True)])
+    uv_area = np.array([np.abs(uv_areas(P, F)).sum() for P, F in zip(P_list, F_list, strict=True)])
     zero = np.flatnonzero(uv_area <= 0)
     if len(zero):
         raise MeshError(f"pack_charts: chart(s) {zero[:5].tolist()} have zero UV area")

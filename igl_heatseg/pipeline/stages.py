@@ -52,10 +52,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-def _uv_area(UV: np.ndarray, F: np.ndarray) -> float:
-    return float(np.abs(uv_areas(UV, F)).sum())
-
-
 def check_cut_paths(mesh: CleanMesh, cut_paths: Sequence[tuple[int, int]]) -> None:
     """Input-vertex ids of cut paths: pairs of integers, in range, used by a face, distinct."""
     n_in = mesh.n_input_vertices
@@ -477,7 +473,8 @@ def parameterize_charts(
 
 def _packable(ch: Chart) -> bool:
     """Whether :func:`pack` packs a mapped chart (finite UVs of positive area)."""
-    return bool(np.isfinite(ch.param.UV).all() and _uv_area(ch.param.UV, ch.cut.F) > 0)
+    UV = ch.param.UV
+    return bool(np.isfinite(UV).all() and np.abs(uv_areas(UV, ch.cut.F)).sum() > 0)
 
 
 def _fill(charts: list) -> float:

@@ -42,7 +42,7 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 logger = logging.getLogger(__name__)
 
 __all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector",
-           "onto_surfaces", "edge_curve", "curve_distance"]
+           "onto_surfaces", "edge_curve", "curve_distance", "polyline_distance"]
 
 #: Singular values of the stacked surface normals below this fraction of the largest are
 #: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
@@ -59,6 +59,10 @@ EXACT_CURVE_REL = 1e-8
 
 #: B-spline degree bounds for edge curves and freeform patches (cubic up to OCC's default 8).
 DEG_MIN, DEG_MAX = 3, 8
+#: edge_curve: the fitted B-spline is sampled this many times per point and must stay within
+#: OVERSHOOT_FACTOR x its tolerance of the points' polyline, else the polyline is the curve.
+OVERSHOOT_SAMPLES = 4
+OVERSHOOT_FACTOR = 10.0
 
 
 def _pnt(p) -> gp_Pnt:
@@ -357,7 +361,47 @@ def edge_curve(P: np.ndarray, tol: float, scale: float):
     fit = GeomAPI_PointsToBSpline(arr, deg_min, max(DEG_MAX, deg_min), GeomAbs_Shape.GeomAbs_C2,
                                   float(tol))
     curve = fit.Curve()
-    return curve, curve.FirstParameter(), curve.LastParameter()
+    t0, t1 = curve.FirstParameter(), curve.LastParameter()
+    Q = np.array([[q.X(), q.Y(), q.Z()] for q in
+                  (curve.Value(float(t)) for t in np.linspace(t0, t1, OVERSHOOT_SAMPLES * len(P)))])
+    if polyline_distance(Q, P).max() > OVERSHOOT_FACTOR * tol:
+        # a smooth spline rings where the points turn sharply (a corner the chain runs through):
+        # the polyline itself, as a degree-1 B-spline, stays on the points
+        fit = GeomAPI_PointsToBSpline(arr, 1, 1, GeomAbs_Shape.GeomAbs_C0, float(tol))
+        curve = fit.Curve()
+        t0, t1 = curve.FirstParameter(), curve.LastParameter()
+    return curve, t0, t1
+
+
+def polyline_distance(Q: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Distance of points to a polyline (chunked: memory ``O(256 q)``).
+
+    Parameters
+    ----------
+    Q : (r, 3) float64
+        Points.
+    P : (q, 3) float64
+        Polyline vertices in order, ``q >= 2``.
+
+    Returns
+    -------
+    (r,) float64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0]])
+    >>> polyline_distance(np.array([[0.5, 0.5, 0], [2, 2, 0], [0.5, -1, 0]]), P).round(3)
+    array([0.5  , 1.414, 1.   ])
+    """
+    A, D = P[:-1], P[1:] - P[:-1]
+    DD = np.maximum(np.einsum("sk,sk->s", D, D), 1e-300)
+    out = np.empty(len(Q))
+    for i in range(0, len(Q), 256):
+        R = Q[i:i + 256, None, :] - A[None]
+        t = np.clip(np.einsum("qsk,sk->qs", R, D) / DD, 0.0, 1.0)
+        out[i:i + 256] = np.linalg.norm(R - t[..., None] * D[None], axis=2).min(axis=1)
+    return out
 
 
 def curve_distance(curve, P: np.ndarray) -> np.ndarray:

@@ -574,3 +574,27 @@ def test_edge_curve_of_a_smooth_chain_stays_a_smooth_spline():
     Q = np.array([[q.X(), q.Y(), q.Z()] for q in
                   (curve.Value(float(x)) for x in np.linspace(t0, t1, 400))])
     assert polyline_distance(Q, P).max() < 2e-3  # the chords' sagitta, not ringing
+
+
+def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
+    """A chain of one mesh edge between two corners with the same three surfaces around them:
+    both corners project onto the surfaces' one common point, which left a null edge
+    (MakeEdge: DifferentPointsOnClosedCurve) and the whole model faceted (paper mode on a
+    tuning block). Both corners now stay at their mesh positions."""
+    from igl_heatseg.cad import build as cad_build
+    from igl_heatseg.cad import geometry
+    from igl_heatseg.cad.topology import BoundaryGraph, Chain
+
+    V = np.array([[1.0, 1.0, 1.0 + 1e-3], [1.0 + 1e-3, 1.0, 1.0]])
+    planes = box_planes()[0], box_planes()[2], box_planes()[4]  # z, x and y = 1
+    projs = [geometry.Projector(s, geometry.occ_surface(s)) for s in planes]
+    graph = BoundaryGraph(chains=[Chain(np.array([0, 1]), 0, 1)], loops=[[], [], []],
+                          corners=np.array([0, 1]), vertex_sides={0: (0, 1, 2), 1: (0, 1, 2)})
+    ctx = {"curve_tol": 1e-4, "devs": [0.0, 0.0, 0.0], "mean_edge": 0.1}
+    pos = cad_build._place_vertices(V, graph, projs, ctx)
+    assert np.linalg.norm(pos[0] - pos[1]) > ctx["curve_tol"]
+    assert np.allclose(pos[0], V[0]) and np.allclose(pos[1], V[1])
+    # a single corner still moves onto the surfaces
+    graph1 = BoundaryGraph(chains=[], loops=[[], [], []], corners=np.array([0]),
+                           vertex_sides={0: (0, 1, 2)})
+    assert np.allclose(cad_build._place_vertices(V, graph1, projs, ctx)[0], [1.0, 1.0, 1.0])

@@ -5,9 +5,9 @@ float64``, ``F (m,3) int64``, outward when closed), face ``labels (m,) int64`` i
 (each segment face-connected), ``k`` :class:`igl_heatseg.surfaces.model.Surface` objects and
 optional per-segment UV charts; returns a :class:`CadResult` (OCC shape, per-face status,
 fidelity, timings). Faces that cannot be built are faceted and reported, never raised.
-Imports only :mod:`igl_heatseg.errors` and :mod:`igl_heatseg.surfaces` from the package
-(:mod:`.segments` fits surfaces to segments that have none, and turns pipeline charts, taken
-by duck typing, into the ``uv`` argument).
+Imports only :mod:`igl_heatseg.errors`, :mod:`igl_heatseg.mesh` and
+:mod:`igl_heatseg.surfaces` from the package (:mod:`.segments` fits surfaces to segments that
+have none, and turns pipeline charts, taken by duck typing, into the ``uv`` argument).
 
 OpenCASCADE (``OCP``) is an optional dependency, imported when a name of this subpackage is
 first used; without it an ImportError says ``pip install 'igl_heatseg[cad]'``.

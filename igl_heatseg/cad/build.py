@@ -21,7 +21,6 @@ import numpy as np
 
 from igl_heatseg.errors import MeshError
 from igl_heatseg.surfaces.model import Surface
-from igl_heatseg.surfaces.samples import segment_adjacency
 
 from ._ocp import require_ocp
 
@@ -44,7 +43,7 @@ from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .fidelity import brep_fidelity, faces_of  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .step import read_step, write_step  # noqa: E402
-from .topology import boundary_graph  # noqa: E402
+from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
@@ -241,6 +240,10 @@ def _place_vertices(V, graph, projs, ctx):
                 logger.debug("vertex %d: surfaces ill-conditioned (res %.3g), mesh vertex", v,
                              res[0])
         pos[v] = X
+    for ch in graph.chains:  # two corners moved onto one point would make a null edge
+        a, b = int(ch.verts[0]), int(ch.verts[-1])
+        if a != b and np.linalg.norm(pos[a] - pos[b]) <= ctx["curve_tol"]:
+            pos[a], pos[b] = V[a], V[b]
     return pos
 
 
@@ -568,7 +571,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     timings: dict = {}
     skip: dict = {}  # segments faceted after sewing: failed BRepCheck, or along free edges
     cache: dict = {}
-    neighbours = _segment_neighbours(F, labels, len(surfaces))
+    neighbours = segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it
     try:
         for attempt in range(MAX_REBUILDS + 1):
@@ -763,7 +766,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
     faces, status, owner = [], [], []
-    areas = _segment_areas(V, F, labels, k)
+    areas = segment_areas(V, F, labels, k)
     for a in range(k):
         progress("faces", a / k)
         face, reason = (None, reasons[a]) if geoms[a] is None else _face(
@@ -781,19 +784,3 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
     timings["faces"] = time.perf_counter() - t
     return faces, status, ctx["sew_tol"], owner
-
-
-def _segment_neighbours(F, labels, k) -> dict:
-    """Segment -> set of the segments sharing an edge with it."""
-    fa, fb = segment_adjacency(F, labels)
-    out: dict = {a: set() for a in range(k)}
-    for a, b in zip(labels[fa].tolist(), labels[fb].tolist(), strict=True):
-        out[a].add(b)
-        out[b].add(a)
-    return out
-
-
-def _segment_areas(V, F, labels, k):
-    import igl
-
-    return np.bincount(labels, weights=0.5 * igl.doublearea(V, F).ravel(), minlength=k)

@@ -17,9 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from igl_heatseg.mesh.geometry import face_areas
+from igl_heatseg.surfaces.samples import segment_adjacency
+
 logger = logging.getLogger(__name__)
 
-__all__ = ["Chain", "BoundaryGraph", "boundary_graph"]
+__all__ = ["Chain", "BoundaryGraph", "boundary_graph", "segment_neighbours", "segment_areas"]
 
 #: Turning angle (radians) at which a boundary polyline vertex becomes a B-Rep vertex even
 #: when only two sides meet there: the corners of an open square patch, the kinks of a mesh
@@ -210,3 +213,57 @@ def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> 
     g.vertex_sides = {v: tuple(sorted(sides[v])) for v in starts}
     logger.debug("boundary graph: %d chains, %d corners", len(g.chains), len(starts))
     return g
+
+
+def segment_neighbours(F: np.ndarray, labels: np.ndarray, k: int) -> dict:
+    """Segment -> set of the segments sharing an edge with it.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    k : int
+
+    Returns
+    -------
+    dict of int -> set of int
+        Every segment ``0..k-1`` is a key.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> segment_neighbours(np.array([[0, 1, 2], [2, 1, 3], [4, 5, 6]]), np.array([0, 1, 2]), 3)
+    {0: {1}, 1: {0}, 2: set()}
+    """
+    fa, fb = segment_adjacency(F, labels)
+    out: dict = {a: set() for a in range(k)}
+    for a, b in zip(labels[fa].tolist(), labels[fb].tolist(), strict=True):
+        out[a].add(b)
+        out[b].add(a)
+    return out
+
+
+def segment_areas(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> np.ndarray:
+    """Area of every segment.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    k : int
+
+    Returns
+    -------
+    (k,) float64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> segment_areas(V, np.array([[0, 1, 2], [2, 1, 3]]), np.array([0, 0]), 2).tolist()
+    [1.0, 0.0]
+    """
+    return np.bincount(labels, weights=face_areas(V, F), minlength=k)

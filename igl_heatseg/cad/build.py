@@ -3,9 +3,11 @@
 Stages (timed in :attr:`CadResult.timings`): ``topology`` (chains, loops, corners from the
 labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation check),
 ``vertices`` and ``edges`` (Gauss-Newton onto the adjacent surfaces, exact lines and circles
-or B-spline curves, each edge built once and shared by its two faces), ``faces`` (trimmed
-faces, ``ShapeFix_Face`` for pcurves and seams, per-face checks; failures become faceted
-patches), ``sew`` (sewing, shape fix, same-domain unification, solid) and ``fidelity``.
+or B-spline curves -- the chain's polyline where a spline would ring off it -- each edge
+built once and shared by its two faces; two corners of one chain never share a point),
+``faces`` (trimmed faces, ``ShapeFix_Face`` for pcurves and seams, per-face checks; failures
+become faceted patches), ``sew`` (sewing, shape fix, same-domain unification, solid) and
+``fidelity``.
 """
 
 from __future__ import annotations

@@ -59,7 +59,7 @@ def test_cad_cube_gives_a_valid_solid_of_six_planes(cube_obj, tmp_path, capsys):
     assert cad["not_built"] == [] and cad["fidelity"]["solids"] == 1
     for key in ("valid", "free_edges", "faces_by_type", "hausdorff", "rms", "volume_rel_error"):
         assert key in cad["fidelity"]
-    assert {"surfaces", "edges", "faces", "sew", "fidelity", "step"} <= set(cad["timings"])
+    assert {"surfaces", "edges", "faces", "sew", "check", "fidelity", "step"} <= set(cad["timings"])
     # everything `segment` writes is there too
     assert {"labels.txt", "vertex_labels.txt", "segmented.ply"} <= {p.name for p in out.iterdir()}
     assert not list(tmp_path.glob(".out.*"))  # atomic: no temporary folder left

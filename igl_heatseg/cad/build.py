@@ -6,8 +6,8 @@ labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation c
 or B-spline curves -- the chain's polyline where a spline would ring off it -- each edge
 built once and shared by its two faces; two corners of one chain never share a point),
 ``faces`` (trimmed faces, ``ShapeFix_Face`` for pcurves and seams, per-face checks; failures
-become faceted patches), ``sew`` (sewing, shape fix, same-domain unification, solid) and
-``fidelity``.
+become faceted patches), ``sew`` (sewing, shape fix, same-domain unification, solid),
+``check`` (BRepCheck in memory and after a STEP round trip, once per build) and ``fidelity``.
 """
 
 from __future__ import annotations
@@ -584,7 +584,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             shape, info = assemble(faces, sew_tol, closed,
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
+            t = time.perf_counter()
             bad = _invalid_segments(shape, faces, owner, status, neighbours)
+            timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours)
                 if gaps:

@@ -23,6 +23,7 @@ __all__ = [
     "corner_fans",
     "face_adjacency",
     "face_components",
+    "label_pieces",
     "vertex_components",
     "boundary_loops",
     "euler_characteristic",
@@ -244,6 +245,38 @@ def face_components(F: np.ndarray, topo: EdgeTopology | None = None) -> tuple[in
     """
     count, C = connected_components(face_adjacency(F, topo), directed=False)
     return int(count), C.astype(np.int64)
+
+
+def label_pieces(F: np.ndarray, labels: np.ndarray, TT: np.ndarray) -> np.ndarray:
+    """Split every label into its edge-connected pieces of faces.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int
+        Any integer label per face.
+    TT : (m, 3) int64
+        Face-face adjacency, -1 on a border (``igl.triangle_triangle_adjacency(F)[0]``).
+
+    Returns
+    -------
+    (m,) int64
+        Piece of each face, ``0..p-1``: two faces share a piece when a chain of faces with
+        their label joins them through shared edges.
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> F = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4]])
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> label_pieces(F, np.array([7, 8, 7]), TT).tolist()    # label 7 falls into two pieces
+    [0, 1, 2]
+    """
+    fa = np.repeat(np.arange(len(F)), 3)
+    fb = np.asarray(TT).ravel()
+    keep = (fb >= 0) & (labels[np.maximum(fb, 0)] == labels[fa])
+    A = sp.csr_matrix((np.ones(int(keep.sum())), (fa[keep], fb[keep])), shape=(len(F),) * 2)
+    return connected_components(A, directed=False)[1].astype(np.int64)
 
 
 def vertex_components(n: int, F: np.ndarray) -> tuple[int, np.ndarray]:

@@ -31,10 +31,9 @@ from dataclasses import dataclass, field
 
 import igl
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, face_normals
+from ..mesh.topology import label_pieces
 from .samples import segment_adjacency, vertex_samples
 from .segment_fit import (
     GROW_ANGLE,
@@ -650,12 +649,7 @@ def _reconnect(V, F, labels, fits: dict, tol: float, TT, W, FN):
 
 def _face_connected(F, labels, TT=None) -> np.ndarray:
     """Split every label into its face-connected pieces; returns piece ids ``0..p-1``."""
-    TT = _adjacency(F) if TT is None else TT
-    fa = np.repeat(np.arange(len(F)), 3)
-    fb = TT.ravel()
-    keep = (fb >= 0) & (labels[np.maximum(fb, 0)] == labels[fa])
-    A = sp.csr_matrix((np.ones(int(keep.sum())), (fa[keep], fb[keep])), shape=(len(F),) * 2)
-    return connected_components(A, directed=False)[1].astype(np.int64)
+    return label_pieces(F, labels, _adjacency(F) if TT is None else TT)
 
 
 def refine_segmentation(

@@ -649,3 +649,25 @@ def test_abc_cones_and_cylinder_get_their_brep_types():
         assert s.kind == types[str(k)].lower()
         if s.kind == "cone":
             assert s.params["half_angle"] == pytest.approx(math.pi / 4, abs=0.01)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_fit_faces_tries_curved_kinds_when_a_plane_is_near_only_by_distance(seed):
+    """A noisy quarter fillet (radius 5, noise 0.4) is within a tolerance of 1 of a plane by
+    its distances alone (RMS ~0.7), but half its faces tilt more than GROW_ANGLE from that
+    plane: the plane is refused and the cylinder, next in line, is the fit (not freeform)."""
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    t, y = np.meshgrid(np.linspace(0, np.pi / 2, 25), np.linspace(0, 10, 21), indexing="ij")
+    W = np.c_[5 * np.cos(t.ravel()), y.ravel(), 5 * np.sin(t.ravel())]
+    V = W + np.random.default_rng(seed).normal(scale=0.4, size=W.shape)
+    idx = np.arange(V.shape[0]).reshape(t.shape)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    faces = np.arange(len(F))
+    # normals from a smooth copy (the robust pipeline's denoised positions), distances on V
+    assert fit_faces(V, F, faces, 1.0, kinds=("plane",), W=W).kind == "freeform"
+    s = fit_faces(V, F, faces, 1.0, W=W)
+    assert s.kind == "cylinder", s.kind
+    assert abs(s.params["radius"] - 5) < 0.5

@@ -122,15 +122,23 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
         TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
     ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
         s = _trimmed_fit(V, F, faces, tol, allowed, W, s, (P, N, w)) or s
-    if s.is_analytic:
-        # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
-        # three (radius, height) profile points, which a torus always passes through. The face
-        # normals must agree with the surface's too.
-        FN = face_normals(V if W is None else W, F) if FN is None else FN
-        if not normals_agree(V, F, FN, faces, s):
-            return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=s.rms,
-                           max_dev=s.max_dev, area=float(face_areas(V, F[faces]).sum()))
-    return s
+    # positions alone can be fooled: a fan cap (centre + rim) and a ring of a cylinder have
+    # three (radius, height) profile points, which a torus always passes through. The face
+    # normals must agree with the surface's too; when they do not, the more complex kinds are
+    # tried (a noisy quarter fillet is within tolerance of a plane by distance alone).
+    if not s.is_analytic:
+        return s
+    first = s
+    FN = face_normals(V if W is None else W, F) if FN is None else FN
+    while s.is_analytic:
+        if normals_agree(V, F, FN, faces, s):
+            return s
+        rest = allowed[allowed.index(s.kind) + 1:]
+        if not rest:
+            break
+        s = fit_surface(P, N, w, tol=tol, kinds=rest)
+    return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=first.rms,
+                   max_dev=first.max_dev, area=float(face_areas(V, F[faces]).sum()))
 
 
 def normals_agree(V, F, FN, faces, s: Surface) -> bool:

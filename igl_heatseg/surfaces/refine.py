@@ -16,9 +16,8 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
 4. **Move boundary faces** to the neighbouring surface they lie on, refitting between passes (a
    Lloyd loop as in variational shape approximation, Cohen-Steiner et al. 2004), so boundaries
    follow the crease instead of zig-zagging along triangle edges.
-5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut between each
-   pair of segments (:mod:`~igl_heatseg.surfaces.boundary_cut`): there no face is clearly nearer
-   one surface, and step 4 leaves the zig-zag the heat fields drew.
+5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut, then merge again
+   (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
@@ -775,9 +774,11 @@ def refine_segmentation(
             break
     t = time.perf_counter()
     if not exact:  # step 5 (an exact tessellation's boundaries are its creases already)
-        for k in swap_boundaries(V, F, labels, fits, tol, TT, FN):
+        for k in (cut := swap_boundaries(V, F, labels, fits, tol, TT, FN)):
             fits[k] = fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
+        if cut and merge:  # what the cut left of a segment may join a neighbour's surface
+            merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)

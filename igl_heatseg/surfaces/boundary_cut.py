@@ -5,8 +5,8 @@ and off the other, and moving each face to the surface it lies on (the Lloyd pas
 :mod:`~igl_heatseg.surfaces.refine`) puts the boundary on the crease.  Where they meet
 tangentially (a fillet into its plane, a pipe's cylinder into its elbow's torus), a band of
 faces lies within the noise of both surfaces, and face-by-face moves leave the boundary
-wherever the heat fields put it: a zig-zag along triangle edges, up to twice the true
-boundary's length on a noisy part.
+wherever the heat fields put it: a zig-zag along triangle edges, up to 1.8 times the true
+boundary's length on the noisy tuning parts (pipe elbows).
 
 Here the labels of two adjacent segments ``a`` and ``b`` are chosen together, over the band of
 their faces near the common boundary that could lie on either surface, by the labelling that
@@ -15,13 +15,13 @@ minimises (Boykov, Veksler & Zabih 2001, the alpha-beta swap move)::
     E = sum_f area_f * min((d_f / tol)^2, CAP) + SMOOTHNESS * h * sum_(f,g) |e_fg| [l_f != l_g]
 
 ``d_f`` is the RMS distance of face ``f``'s corners to the surface of its label and ``h`` the
-mean edge length, so both terms are areas: a boundary one edge longer costs what a face
-``sqrt(SMOOTHNESS)`` tolerances off its surface does.  The data term sets where the boundary
-lies (the distances of the faces of a tangent join grow quadratically away from it, and the
-band's integral finds the line); the length term makes the line straight instead of following
-the noise.  Faces that lie off the other surface (RMS beyond GROW_TOL x tol, a corner beyond
-MAX_DEV_FACTOR x tol, or a normal beyond GROW_ANGLE) keep their label and are the cut's fixed
-ends, so a crease boundary and a small true face (a chamfer) are never moved.  A cut that
+mean edge length, so both terms are areas: a boundary one mean edge longer costs what a face of
+area ``h^2`` at ``sqrt(SMOOTHNESS)`` tolerances from its surface does. The data term sets where
+the boundary lies (the distances of the faces of a tangent join grow quadratically away from it,
+and the band's integral finds the line); the length term makes the line straight instead of
+following the noise. Faces that lie off the other surface (RMS beyond GROW_TOL x tol, a corner
+beyond MAX_DEV_FACTOR x tol, or a normal beyond GROW_ANGLE) keep their label and are the cut's
+fixed ends, so a crease boundary and a small true face (a chamfer) are never moved. A cut that
 leaves either segment farther from its surface than the tolerance (or than before) is undone.
 The minimum cut is exact (:func:`scipy.sparse.csgraph.maximum_flow`).
 """

@@ -98,8 +98,9 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
     Returns
     -------
     Surface
-        ``freeform`` (with the best analytic fit's ``rms``) when the face normals disagree with
-        the fit on more than NORMAL_OFF_SHARE of the area (:func:`normals_agree`).
+        The simplest kind within ``tol`` whose normals agree with the faces'
+        (:func:`normals_agree`); when they disagree, the more complex kinds are fitted in turn.
+        ``freeform`` (with the simplest fit's ``rms``) when no kind passes both.
 
     Examples
     --------

@@ -34,7 +34,8 @@ from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from ..mesh.geometry import face_areas
 from ..mesh.topology import label_pieces
-from .segment_fit import GROW_ANGLE, GROW_TOL, corner_rms, normal_angle
+from .samples import segment_adjacency
+from .segment_fit import GROW_ANGLE, GROW_TOL, corner_max_dev, corner_rms, normal_angle
 from .select import MAX_DEV_FACTOR
 
 __all__ = ["binary_min_cut", "swap_boundaries", "SMOOTHNESS", "CAP", "BAND_RINGS"]
@@ -130,11 +131,6 @@ def _band(F, TT, labels, a, b, rings):
     return np.flatnonzero(band)
 
 
-def _max_dev(V, F, faces, s) -> np.ndarray:
-    """Largest distance of each face's corners to ``s``."""
-    return np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-
-
 def _rms(V, F, mask, s) -> float:
     """RMS over the faces in ``mask`` of their corners' RMS distance to ``s``."""
     return float(np.sqrt(np.mean(corner_rms(V, F, np.flatnonzero(mask), s) ** 2)))
@@ -215,10 +211,8 @@ def swap_boundaries(V, F, labels, fits: dict, tol: float, TT, FN, *, smoothness=
     # edge k of face f joins corners k and k + 1 (igl.triangle_triangle_adjacency's order)
     elen = np.linalg.norm(V[F[:, [1, 2, 0]]] - V[F], axis=2)
     h = float(np.mean(elen))
-    fa = np.repeat(np.arange(len(F)), 3)
-    fb = TT.ravel()
-    pair = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])
-    la, lb = labels[fa[pair]], labels[fb[pair]]
+    fa, fb = segment_adjacency(F, labels, TT)
+    la, lb = labels[fa], labels[fb]
     pairs = np.unique(np.c_[np.minimum(la, lb), np.maximum(la, lb)], axis=0)
     changed: set = set()
     for a, b in pairs.tolist():
@@ -232,7 +226,7 @@ def swap_boundaries(V, F, labels, fits: dict, tol: float, TT, FN, *, smoothness=
         own = (labels[band] == b).astype(np.int64)
         oth = 1 - own
         rows = np.arange(len(band))
-        far = np.c_[_max_dev(V, F, band, fits[a]), _max_dev(V, F, band, fits[b])]
+        far = np.c_[corner_max_dev(V, F, band, fits[a]), corner_max_dev(V, F, band, fits[b])]
         free = ((d[rows, oth] <= GROW_TOL * tol) & (far[rows, oth] <= MAX_DEV_FACTOR * tol)
                 & (ang[rows, oth] <= GROW_ANGLE))
         if not np.any(free):

@@ -440,13 +440,13 @@ def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, F
     return merged
 
 
-def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None) -> int:
+def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None, TT=None) -> int:
     """Lloyd passes: faces on boundaries go to the neighbouring surface clearly nearer to them;
     the segments that changed are refitted before the next pass."""
     moved = 0
     FN = face_normals(V if W is None else W, F) if FN is None else FN
     for _ in range(MOVE_PASSES):
-        fa, fb = segment_adjacency(F, labels)
+        fa, fb = segment_adjacency(F, labels, TT)
         if len(fa) == 0:
             break
         cand_face = np.r_[fa, fb]
@@ -764,7 +764,7 @@ def refine_segmentation(
         timings["merge"] += time.perf_counter() - t
         t = time.perf_counter()
         progress("boundaries", 0.0)
-        mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN)
+        mv_round = _move_boundary_faces(V, F, labels, fits, tol, W, FN, TT)
         mv_round += _smooth_teeth(V, F, labels, fits, tol, TT, FN)
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)  # a move may cut one
         timings["boundaries"] += time.perf_counter() - t

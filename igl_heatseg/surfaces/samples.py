@@ -107,13 +107,16 @@ def face_residuals(V, F, faces, surface: Surface) -> np.ndarray:
     return np.max(np.abs(d), axis=1)
 
 
-def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def segment_adjacency(F: np.ndarray, labels: np.ndarray,
+                      TT: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Faces on both sides of every interior edge whose two labels differ (each edge once).
 
     Parameters
     ----------
     F : (m, 3) int64
     labels : (m,) int64
+    TT : (m, 3) int64, optional
+        ``igl.triangle_triangle_adjacency(F)[0]`` when the caller has it (computed otherwise).
 
     Returns
     -------
@@ -128,7 +131,8 @@ def segment_adjacency(F: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np
     >>> fa.tolist(), fb.tolist()
     ([0], [1])
     """
-    TT, _ = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))
+    if TT is None:
+        TT = igl.triangle_triangle_adjacency(np.ascontiguousarray(F, dtype=np.int64))[0]
     fa = np.repeat(np.arange(len(F)), 3)
     fb = TT.ravel()
     keep = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])

@@ -187,7 +187,7 @@ def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface 
     A = face_areas(V, F[faces])
     # one least-trimmed-squares step: the stray faces tilt the loose fit, so rank the faces by
     # their distance to it, refit without the worst TRIM_SHARE of the area, then check
-    d = np.abs(loose.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    d = corner_max_dev(V, F, faces, loose)
     order = np.argsort(d, kind="stable")
     keep = np.zeros(len(faces), dtype=bool)
     keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
@@ -197,7 +197,7 @@ def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface 
     s = fit_surface(P, N, w, tol=tol, kinds=kinds)
     if not s.is_analytic:
         return None
-    d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    d = corner_max_dev(V, F, faces, s)
     on = d <= GROW_TOL * tol
     if A[~on].sum() > TRIM_SHARE * A.sum():
         return None
@@ -279,6 +279,35 @@ def corner_rms(V, F, faces, s: Surface) -> np.ndarray:
         return np.full(len(faces), np.inf)
     d = s.distance(V[F[faces]].reshape(-1, 3)).reshape(-1, 3)
     return np.sqrt((d * d).mean(axis=1))
+
+
+def corner_max_dev(V, F, faces, s: Surface) -> np.ndarray:
+    """Largest distance of each face's three corners to ``s``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (f,) int64
+    s : Surface
+
+    Returns
+    -------
+    (f,) float64
+        ``inf`` for a freeform ``s``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 3]]); F = np.array([[0, 1, 2]])
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
+    >>> corner_max_dev(V, F, [0], z)
+    array([3.])
+    """
+    if not s.is_analytic:
+        return np.full(len(faces), np.inf)
+    return np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
 
 
 def normal_angle(V, F, FN, faces, s: Surface) -> np.ndarray:

@@ -387,7 +387,10 @@ def cgal_ransac_isolated(
         proc = ctx.Process(target=_child, args=(child, V, F, kwargs))
         proc.start()
         child.close()
-        msg = parent.recv() if parent.poll(timeout) else None
+        try:  # a crashed child closes the pipe: poll() sees the EOF, recv() raises
+            msg = parent.recv() if parent.poll(timeout) else None
+        except EOFError:
+            msg = None
         proc.join(5.0)
         if proc.is_alive():
             proc.kill()

@@ -40,6 +40,19 @@ def test_binary_min_cut_without_pairs_takes_each_cheaper_label():
     assert lab.tolist() == [True, False, False]
 
 
+@pytest.mark.parametrize("args, match", [
+    (([1.0, 2.0], [0.0], [], [], []), "shapes"),
+    (([1.0, np.nan], [0.0, 1.0], [], [], []), "finite"),
+    (([1.0, 0.0], [0.0, 1.0], [0], [1], [-1.0]), "finite and >= 0"),
+    (([1.0, 0.0], [0.0, 1.0], [0], [2], [1.0]), "outside"),
+])
+def test_binary_min_cut_rejects_bad_input(args, match):
+    from igl_heatseg.errors import MeshError
+
+    with pytest.raises(MeshError, match=match):
+        binary_min_cut(*args)
+
+
 def _plane_into_cylinder(noise: float, seed: int = 0, h: float = 0.25, R: float = 4.0):
     """A plane z = 0 (x < 0) running tangentially into a cylinder of radius R (axis along y
     at height R), gridded by arc length s in [-6, 6] and y in [0, 6]."""

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
+from ..errors import MeshError
 from ..mesh.geometry import face_areas
 from ..mesh.topology import label_pieces
 from .samples import segment_adjacency
@@ -73,6 +74,11 @@ def binary_min_cut(cost0, cost1, ei, ej, w) -> np.ndarray:
         True for the nodes labelled 1.  Costs are rounded to a grid of ``total / 2**29`` (the
         flow network's capacities are int32), so ties may go either way.
 
+    Raises
+    ------
+    MeshError
+        On mismatched shapes, negative or non-finite costs, or pairs outside ``0..n-1``.
+
     Examples
     --------
     >>> import numpy as np
@@ -89,6 +95,14 @@ def binary_min_cut(cost0, cost1, ei, ej, w) -> np.ndarray:
     ej = np.asarray(ej, dtype=np.int64)
     w = np.asarray(w, dtype=np.float64)
     n = len(c0)
+    if not (c1.shape == c0.shape == (n,) and ei.shape == ej.shape == w.shape == (len(w),)):
+        raise MeshError(f"binary_min_cut: costs of shapes {c0.shape} and {c1.shape}, pairs "
+                        f"{ei.shape} and {ej.shape}, weights {w.shape}: expected (n,) and (k,)")
+    if not (np.all(np.isfinite(c0) & (c0 >= 0)) and np.all(np.isfinite(c1) & (c1 >= 0))
+            and np.all(np.isfinite(w) & (w >= 0))):
+        raise MeshError("binary_min_cut: costs and weights must be finite and >= 0")
+    if len(ei) and not (min(ei.min(), ej.min()) >= 0 and max(ei.max(), ej.max()) < n):
+        raise MeshError(f"binary_min_cut: pair indices outside 0..{n - 1}")
     if n == 0:
         return np.zeros(0, dtype=bool)
     base = np.minimum(c0, c1)
@@ -235,6 +249,8 @@ def swap_boundaries(V, F, labels, fits: dict, tol: float, TT, FN, *, smoothness=
         index = np.full(len(F), -1, dtype=np.int64)
         index[faces] = np.arange(len(faces))
         cost = area[faces, None] * np.minimum((d[free] / tol) ** 2, CAP)
+        if not np.all(np.isfinite(cost)):  # a degenerate fit: leave this pair as it is
+            continue
         # pairs of free faces, and free faces next to fixed faces of a or b
         nb = TT[faces]
         k = np.nonzero(nb >= 0)

@@ -8,6 +8,7 @@ import igl
 import numpy as np
 
 from igl_heatseg.surfaces import refine_segmentation, segment_adjacency
+from igl_heatseg.surfaces.split import real_split
 
 
 def capped_cylinder(facets: int = 12, rows: int = 6, r: float = 1.0, h: float = 3.0):
@@ -160,7 +161,7 @@ def test_region_growing_gives_up_on_a_smooth_freeform_patch(monkeypatch):
     n_full = len(grown)
     parts = [faces[full == r] for r in range(full.max() + 1)]
     fits = [R.fit_faces(V, F, p, tol) for p in parts]
-    assert len(parts) > 10 and not R._real_split(V, F, parts, fits, tol)
+    assert len(parts) > 10 and not real_split(V, F, parts, fits, tol)
     grown.clear()
     assert np.all(R.grow_regions(V, F, faces, tol, good_rms=R.SPLIT_RMS_RATIO) == 0)
     assert len(grown) < n_full / 3

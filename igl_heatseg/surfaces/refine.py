@@ -42,13 +42,21 @@ from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
     MIN_REGION_FACES,
-    PARAMS,
     corner_rms,
     explains,
     fit_faces,
     normal_angle,
     normals_agree,
     rms_to,
+)
+from .split import (
+    SPLIT_GOOD_SHARE,
+    SPLIT_RMS_RATIO,
+    SPLIT_RMS_RATIO_NOISY,
+    evidence,
+    fold_weak,
+    ransac_regions,
+    real_split,
 )
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
@@ -104,17 +112,6 @@ CORE_MIN_SHARE = 0.3
 #: A core's surface stands for the whole segment when the segment's faces on it (corner RMS
 #: within GROW_TOL x tol) hold this share of its area; else the segment is split.
 CORE_EXPLAINS = 0.85
-
-#: A region-growing split is kept when at least SPLIT_GOOD_SHARE of the area is in pieces
-#: whose fit RMS is within SPLIT_RMS_RATIO x tol (measured: true faces 1e-6 tol on clean CAD
-#: meshes and 0.3-0.5 tol at noise 0.1 edge; the fandisk's freeform blends 0.8-1.0 tol).
-SPLIT_RMS_RATIO = 0.65
-SPLIT_GOOD_SHARE = 0.6
-
-#: The same bar on a noisy mesh, whose true faces fit at 0.6-0.85 tol (region fits carry their
-#: boundaries' noise; measured on a noisy pipe elbow's cylinder and torus).
-SPLIT_RMS_RATIO_NOISY = 0.9
-SPLIT_NOISY_SAMPLES = 4
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
@@ -240,13 +237,13 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
     W : (n, 3) float64, optional
         Positions for normals (a denoised copy of ``V``).
     good_rms : float, optional
-        Give up as soon as no split can be real (:func:`_real_split` with this ratio): when
+        Give up as soon as no split can be real (:func:`~.split.real_split` with this ratio): when
         regions fitted worse than ``good_rms`` x tol already cover more than
         ``1 - SPLIT_GOOD_SHARE`` of the area (a smooth freeform segment, which shatters into
         regions each just within the tolerance); then every face gets region 0.
     noisy : bool
         With ``good_rms``: a region counts as fitted worse only when its fit is evidence
-        (:func:`_evidence`), as in :func:`_real_split` on a noisy mesh.
+        (:func:`~.split.evidence`), as in :func:`~.split.real_split` on a noisy mesh.
 
     Returns
     -------
@@ -301,7 +298,7 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
             continue
         own = fit_faces(V, F, grown, tol, W=W, FN=FN) if own is None else own
         if (not own.is_analytic or own.rms > good_rms * tol) and (
-                not noisy or _evidence(F, grown, own)):
+                not noisy or evidence(F, grown, own)):
             lost += area_of[grown].sum()
             if lost > lost_bar:  # the good regions can no longer hold SPLIT_GOOD_SHARE
                 return np.zeros(len(faces), dtype=np.int64)
@@ -495,56 +492,6 @@ def _core(F, labels, faces, TT) -> np.ndarray:
     return kept if len(kept) >= CORE_MIN_SHARE * len(faces) else faces
 
 
-def _evidence(F, part, s) -> bool:
-    """A fit on a noisy mesh is evidence with SPLIT_NOISY_SAMPLES x its parameters in vertices
-    (two noisy triangles fit a plane exactly)."""
-    return len(np.unique(F[part])) >= SPLIT_NOISY_SAMPLES * PARAMS.get(s.kind, 1)
-
-
-def _fold_weak(V, F, TT, tol, W, FN, parts, part_fits):
-    """Pieces of a split of a noisy segment whose fit is no evidence (:func:`_evidence`; the
-    leftovers of region growing along a noisy crease) join the adjacent piece they share most
-    edges with, smallest first; the pieces that grew are refitted."""
-    piece = np.full(len(F), -1, dtype=np.int64)
-    for r, part in enumerate(parts):
-        piece[part] = r
-    grown = set()
-    alive = len(parts)  # pieces not folded yet (every piece of grow_regions has faces)
-    for r in sorted(range(len(parts)), key=lambda r: len(parts[r])):
-        if alive <= 1:
-            break
-        if _evidence(F, parts[r], part_fits[r]):  # (a grown piece only gained vertices)
-            continue
-        nb = piece[TT[parts[r]][TT[parts[r]] >= 0]]
-        nb = nb[(nb >= 0) & (nb != r)]
-        if len(nb) == 0:
-            continue
-        j = int(np.bincount(nb).argmax())
-        piece[parts[r]] = j
-        parts[j] = np.concatenate([parts[j], parts[r]])
-        parts[r] = parts[r][:0]
-        grown.add(j)
-        alive -= 1
-    keep = [r for r in range(len(parts)) if len(parts[r])]
-    fits = [fit_faces(V, F, parts[r], tol, W=W, FN=FN) if r in grown else part_fits[r]
-            for r in keep]
-    return [parts[r] for r in keep], fits
-
-
-def _real_split(V, F, parts, part_fits, tol, ratio=None, noisy=False) -> bool:
-    """A split found real faces when most of the area lies in pieces fitted well inside the
-    tolerance (``ratio`` x tol: true faces of an exact tessellation fit to round-off); a smooth
-    freeform surface shatters into pieces each just within it, and stays whole. On a noisy mesh
-    a piece counts only when its fit is evidence (:func:`_evidence`)."""
-    ratio = SPLIT_RMS_RATIO if ratio is None else ratio
-    A = np.array([face_areas(V, F[p]).sum() for p in parts])
-    r = np.array([f.rms / tol if f.is_analytic else np.inf for f in part_fits])
-    if noisy:
-        r[[not _evidence(F, p, f) for p, f in zip(parts, part_fits, strict=True)]] = np.inf
-    good = A[r <= ratio].sum()
-    return bool(good >= SPLIT_GOOD_SHARE * A.sum())
-
-
 def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
     """A face with two or three neighbours of another segment, on whose surface it lies
     (corners within GROW_TOL x tol, normal within GROW_ANGLE), joins it: the single-face teeth
@@ -655,6 +602,43 @@ def _face_connected(F, labels, TT=None) -> np.ndarray:
     return label_pieces(F, labels, _adjacency(F) if TT is None else TT)
 
 
+def _split(V, F, faces, tol, FN, TT, W, ratio, exact):
+    """Region growing, then RANSAC (:func:`~igl_heatseg.surfaces.split.ransac_regions`), until
+    one finds real faces (:func:`~igl_heatseg.surfaces.split.real_split`); ``(None, None)``."""
+    for how in ("grow", "ransac"):
+        if how == "grow":
+            sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact)
+        else:
+            sub = ransac_regions(V, F, faces, tol, FN, TT, W)
+        parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
+        part_fits = [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
+        if not exact and len(parts) > 1:
+            parts, part_fits = fold_weak(V, F, TT, tol, W, FN, parts, part_fits, how == "ransac")
+        if len(parts) > 1 and real_split(V, F, parts, part_fits, tol, ratio, not exact):
+            return parts, part_fits
+    return None, None
+
+
+def _split_unexplained(V, F, labels, fits, tol, TT, W, FN, ratio, exact) -> int:
+    """Split again the segments that no surface explains after the merges, moves and cuts
+    (:func:`_split`; they mix faces the first split never saw together); labels and fits in
+    place. Returns the number of segments split."""
+    n = 0
+    nxt = int(labels.max()) + 1
+    for k in [k for k, s in fits.items() if not explains(s, tol)]:
+        faces = np.flatnonzero(labels == k)
+        if len(faces) < 2 * MIN_REGION_FACES:
+            continue
+        parts, part_fits = _split(V, F, faces, tol, FN, TT, W, ratio, exact)
+        for r, (part, fr) in enumerate(zip(parts or [], part_fits or [], strict=True)):
+            lab = k if r == 0 else nxt
+            nxt += r > 0
+            labels[part] = lab
+            fits[lab] = fr
+        n += parts is not None
+    return n
+
+
 def refine_segmentation(
     V: np.ndarray,
     F: np.ndarray,
@@ -735,12 +719,8 @@ def refine_segmentation(
                 if explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
         if split and not explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
-            sub = grow_regions(V, F, faces, tol, FN, TT, W, split_ratio, not exact)
-            parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
-            part_fits = [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
-            if not exact and len(parts) > 1:
-                parts, part_fits = _fold_weak(V, F, TT, tol, W, FN, parts, part_fits)
-            if len(parts) > 1 and _real_split(V, F, parts, part_fits, tol, split_ratio, not exact):
+            parts, part_fits = _split(V, F, faces, tol, FN, TT, W, split_ratio, exact)
+            if parts is not None:
                 n_split += 1
                 for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):
                     lab = k if r == 0 else nxt
@@ -780,6 +760,11 @@ def refine_segmentation(
         if cut and merge:  # what the cut left of a segment may join a neighbour's surface
             merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
+    t = time.perf_counter()
+    if split and _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact):
+        labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
+        merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact) if merge else 0
+    timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
     timings["shards"] = time.perf_counter() - t

@@ -1,0 +1,94 @@
+"""Splitting unexplained segments: the RANSAC regions and their cylinder candidates."""
+
+from __future__ import annotations
+
+import igl
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from igl_heatseg.mesh.geometry import face_normals
+from igl_heatseg.surfaces import refine as R
+from igl_heatseg.surfaces.split import cylinder_from_normals, ransac_regions
+from igl_heatseg.surfaces.tolerance import vertex_tolerance
+
+
+def hole_in_plane(n=24, r_in=2.0, r_out=5.0, depth=3.0, rings=6, noise=0.0, seed=0):
+    """A plane annulus (z = 0, radii r_in..r_out) and the wall of its hole (the cylinder of
+    radius r_in below it), one mesh; truth 0 for the wall's faces, 1 for the plane's."""
+    t = 2 * np.pi * np.arange(n) / n
+    ring = np.c_[np.cos(t), np.sin(t)]
+    rows = [np.c_[r_in * ring, np.full(n, z)] for z in np.linspace(-depth, 0, rings + 1)[:-1]]
+    rows += [np.c_[r * ring, np.zeros(n)] for r in np.linspace(r_in, r_out, rings + 1)]
+    V = np.vstack(rows)
+    j = np.arange(n)
+    F = np.vstack([np.r_[np.c_[i * n + j, i * n + (j + 1) % n, (i + 1) * n + (j + 1) % n],
+                         np.c_[i * n + j, (i + 1) * n + (j + 1) % n, (i + 1) * n + j]]
+                   for i in range(len(rows) - 1)]).astype(np.int64)
+    truth = (np.arange(len(F)) >= 2 * n * rings).astype(np.int64)
+    if noise:
+        N = igl.per_vertex_normals(V, F)
+        V = V + np.random.default_rng(seed).normal(scale=noise, size=(len(V), 1)) * N
+    return V, F, truth
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(0.1, 50.0),
+    st.floats(-1.0, 1.0), st.floats(0.0, 2 * np.pi),
+    st.floats(0.3, 3.0), st.integers(0, 10_000),
+)
+def test_cylinder_from_normals_recovers_exact_cylinders(r, cz, phi, arc, seed):
+    """Points on any cylinder, with its normals, over an arc of 0.3 to 3 radians."""
+    rng = np.random.default_rng(seed)
+    a = np.array([np.sqrt(1 - cz * cz) * np.cos(phi), np.sqrt(1 - cz * cz) * np.sin(phi), cz])
+    u = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+    u /= np.linalg.norm(u)
+    v = np.cross(a, u)
+    t = rng.uniform(0, arc, 12)
+    N = np.cos(t)[:, None] * u + np.sin(t)[:, None] * v
+    c0 = rng.normal(size=3) * 10
+    C = c0 + r * N + rng.uniform(-r, r, 12)[:, None] * a
+    s = cylinder_from_normals(C, N * rng.choice([-1, 1], 12)[:, None], 2 * r)
+    assert s is not None
+    assert abs(abs(s.params["axis"] @ a) - 1) < 1e-9
+    assert abs(s.params["radius"] - r) < 1e-7 * max(r, 1)
+    assert np.abs(s.distance(C)).max() < 1e-7 * max(r, 1)
+
+
+def test_cylinder_from_normals_refuses_flat_patches():
+    C = np.random.default_rng(0).uniform(size=(10, 3)) * [1, 1, 0]
+    N = np.tile([0.0, 0, 1], (10, 1))
+    assert cylinder_from_normals(C, N, 1.0) is None
+
+
+def test_ransac_splits_a_noisy_hole_from_its_plane_where_growth_shatters_it():
+    """Two rings of a hole of radius ~20 noise levels fit a plane: region growing shatters the
+    wall; RANSAC's cylinder candidates take it whole."""
+    V, F, truth = hole_in_plane(noise=0.05)
+    tol = vertex_tolerance(V, F)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = face_normals(V, F)
+    faces = np.arange(len(F))
+    grown = R.grow_regions(V, F, faces, tol, FN, TT, None, R.SPLIT_RMS_RATIO_NOISY, True)
+    assert np.bincount(grown[truth == 0]).max() < 0.9 * (truth == 0).sum()
+    region = ransac_regions(V, F, faces, tol, FN, TT)
+    for t in (0, 1):
+        share = np.bincount(region[truth == t]).max() / (truth == t).sum()
+        assert share >= 0.98
+    assert len(np.unique(region[truth == 0][:1])) == 1
+    assert region[truth == 0][0] != region[truth == 1][0]
+    res = R.refine_segmentation(V, F, np.zeros(len(F), dtype=np.int64), tol)
+    assert sorted(s.kind for s in res.surfaces) == ["cylinder", "plane"]
+
+
+def test_ransac_regions_are_deterministic_and_cover_every_face():
+    V, F, _ = hole_in_plane(noise=0.05, seed=3)
+    tol = vertex_tolerance(V, F)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = face_normals(V, F)
+    faces = np.arange(0, len(F))
+    a = ransac_regions(V, F, faces, tol, FN, TT)
+    b = ransac_regions(V, F, faces, tol, FN, TT)
+    assert np.array_equal(a, b)
+    assert a.min() == 0 and np.array_equal(np.unique(a), np.arange(a.max() + 1))

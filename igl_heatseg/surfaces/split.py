@@ -264,10 +264,12 @@ def evidence(F, part, s) -> bool:
 def fold_weak(V, F, TT, tol, W, FN, parts, part_fits, keep_explained=False):
     """Pieces of a split of a noisy segment whose fit is no evidence (:func:`evidence`; the
     leftovers of region growing along a noisy crease) join the adjacent piece they share most
-    edges with, smallest first; the pieces that grew are refitted. With ``keep_explained``, a
-    piece that its fit explains stays, however small (a RANSAC region of a few faces of a plane,
-    which the merges then join to the rest of its plane; folding pieces under MIN_REGION_FACES
-    faces too was worse on the tuning parts: type .880 -> .878, every bar on 23 -> 21).
+    edges with, smallest first; the pieces that grew are refitted. With ``keep_explained`` (a
+    RANSAC split), a piece that its fit explains stays (a region of a few faces of a plane, which
+    the merges then join to the rest of its plane) unless it has fewer than MIN_REGION_FACES
+    faces, which no fit makes evidence (one face lies on any plane): such a piece joins the
+    adjacent piece on whose surface its corners lie closest (a face across a noisy crease
+    stays with one of its two planes instead of becoming a segment).
 
     Returns
     -------
@@ -282,14 +284,19 @@ def fold_weak(V, F, TT, tol, W, FN, parts, part_fits, keep_explained=False):
     for r in sorted(range(len(parts)), key=lambda r: len(parts[r])):
         if alive <= 1:
             break
-        if evidence(F, parts[r], part_fits[r]) or (
-                keep_explained and explains(part_fits[r], tol)):
+        sliver = keep_explained and len(parts[r]) < MIN_REGION_FACES
+        if not sliver and (evidence(F, parts[r], part_fits[r]) or (
+                keep_explained and explains(part_fits[r], tol))):
             continue  # (a grown piece only gained vertices)
         nb = piece[TT[parts[r]][TT[parts[r]] >= 0]]
         nb = nb[(nb >= 0) & (nb != r)]
         if len(nb) == 0:
             continue
         j = int(np.bincount(nb).argmax())
+        if sliver:
+            near = {int(c): float(corner_rms(V, F, parts[r], part_fits[c]).mean())
+                    for c in np.unique(nb) if part_fits[c].is_analytic}
+            j = min(near, key=near.get) if near else j
         piece[parts[r]] = j
         parts[j] = np.concatenate([parts[j], parts[r]])
         parts[r] = parts[r][:0]

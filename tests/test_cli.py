@@ -180,6 +180,15 @@ def test_segment_robust_mode_reports_primitives_and_scores_better(tmp_path, data
             assert len(rep["primitive_types"]) == rep["segments"]
             assert set(rep["primitive_types"]) <= {"Plane", "Cylinder", "Sphere", "Other"}
             assert rep["theta"] == 0.7
+            # one OBJ polyline per trimming curve, between segments that exist
+            curves = rep["boundary_curves"]
+            obj = (out / "boundaries.obj").read_text().splitlines()
+            assert sum(ln.startswith("l ") for ln in obj) == len(curves) > 0
+            assert all(-1 <= c["left"] < rep["segments"] and c["right"] < rep["segments"]
+                       for c in curves)
+            assert {c["method"] for c in curves} <= {"intersection", "smoothed"}
+        else:
+            assert not (out / "boundaries.obj").exists()
     # the paper's mode merges this thin frame into 2 segments (24 true faces)
     assert scores["paper"][0] < 0.8
     assert scores["robust"][0] >= 0.9 and scores["robust"][1] >= 0.85

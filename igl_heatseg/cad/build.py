@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from igl_heatseg.errors import MeshError
+from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
 
 from ._ocp import require_ocp
@@ -77,11 +78,6 @@ FACET_GAP_FACTOR = 1.5
 #: fraction of the sewing tolerance of their mean-v circle: those circles then replace the
 #: loop edges, and sewing must close the gap (between two such neighbours, twice this).
 REVOLVED_SEW_FRACTION = 0.45
-
-#: A boundary point moves onto the intersection of its surfaces by at most this many times
-#: their deviations from the mesh, plus MOVE_EDGE_FRACTION of the mean edge length.
-MOVE_DEV_FACTOR = 2.0
-MOVE_EDGE_FRACTION = 0.5
 
 #: Widest sewing tolerance tried when a closed part keeps free edges, in mean edge lengths
 #: (wider would merge distinct mesh vertices).
@@ -251,12 +247,9 @@ def _place_vertices(V, graph, projs, ctx):
 
 
 def _move_limit(ctx, sides) -> float:
-    """How far a boundary point may move onto its surfaces' intersection: the surfaces'
-    deviations from the mesh plus the sagitta of a mesh edge (the samples between mesh vertices
-    of a curved border); farther, the intersection is not the one the mesh shows (two nearly
-    tangent surfaces meet elsewhere) and the point stays."""
-    devs = [ctx["devs"][s] for s in sides if s >= 0 and np.isfinite(ctx["devs"][s])]
-    return MOVE_DEV_FACTOR * sum(devs) + MOVE_EDGE_FRACTION * ctx["mean_edge"]
+    """How far a boundary point may move onto its surfaces' intersection
+    (:func:`igl_heatseg.surfaces.boundaries.move_limit` of the built surfaces' deviations)."""
+    return move_limit([ctx["devs"][s] for s in sides if s >= 0], ctx["mean_edge"])
 
 
 def _samples(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -37,21 +37,14 @@ from OCP.GeomAPI import (  # noqa: E402
 from OCP.GeomLProp import GeomLProp_SLProps  # noqa: E402
 from OCP.gp import gp_Ax2, gp_Ax3, gp_Dir, gp_Pnt  # noqa: E402
 
+from igl_heatseg.surfaces.boundaries import GN_ITERS  # noqa: E402
+from igl_heatseg.surfaces.boundaries import onto_surfaces as gauss_newton  # noqa: E402
 from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector",
            "onto_surfaces", "edge_curve", "curve_distance", "polyline_distance"]
-
-#: Singular values of the stacked surface normals below this fraction of the largest are
-#: dropped in Gauss-Newton: two surfaces meeting at less than ~17 deg (a fillet running into
-#: its plane) do not define their intersection well, and the step then only closes the
-#: distances along the mean normal, staying near the mesh.
-GN_RCOND = 0.15
-
-#: Gauss-Newton iterations; quadratic convergence makes a handful enough for analytic pairs.
-GN_ITERS = 12
 
 #: Points on a line or circle within this fraction of the bbox diagonal make an exact
 #: Geom_Line / Geom_Circle edge (points on an analytic intersection sit at ~1e-12).
@@ -266,7 +259,8 @@ class Projector:
 
 
 def onto_surfaces(P: np.ndarray, projectors: list, iters: int = GN_ITERS):
-    """Move points to the nearest common point of several surfaces (Gauss-Newton).
+    """Move points to the nearest common point of several surfaces (Gauss-Newton,
+    :func:`igl_heatseg.surfaces.boundaries.onto_surfaces` on the projectors' residuals).
 
     Parameters
     ----------
@@ -279,21 +273,11 @@ def onto_surfaces(P: np.ndarray, projectors: list, iters: int = GN_ITERS):
     -------
     X : (p, 3) float64
         Moved points; directions the surfaces do not pin down (ill-conditioned intersections,
-        see :data:`GN_RCOND`) keep the start point's coordinate.
+        see :data:`~igl_heatseg.surfaces.boundaries.GN_RCOND`) keep the start point's coordinate.
     res : (p,) float64
         Largest absolute signed distance of each moved point to the surfaces.
     """
-    X = np.array(P, dtype=np.float64, copy=True)
-    for _ in range(iters):
-        parts = [pr.residual(X) for pr in projectors]
-        r = np.stack([d for d, _ in parts], axis=1)  # (p, s)
-        J = np.stack([n for _, n in parts], axis=1)  # (p, s, 3)
-        step = np.einsum("pij,pj->pi", np.linalg.pinv(J, rcond=GN_RCOND), r)
-        X -= step
-        if np.abs(step).max(initial=0.0) < 1e-15 * (1.0 + np.abs(X).max()):
-            break
-    res = np.abs(np.stack([pr.residual(X)[0] for pr in projectors], axis=1)).max(axis=1)
-    return X, res
+    return gauss_newton(P, [pr.residual for pr in projectors], iters)
 
 
 def _circle_fit(P: np.ndarray):

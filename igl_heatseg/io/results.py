@@ -26,6 +26,7 @@ __all__ = [
     "write_segmented_ply",
     "write_report",
     "write_segmentation",
+    "write_boundary_curves",
     "write_run",
     "atomic_dir",
     "is_complete",
@@ -186,6 +187,8 @@ def write_segmentation(
     ``vertex_labels.txt`` has one line per input vertex; ``-1`` marks a vertex no face uses.
     ``segmented.ply`` holds the cleaned mesh (duplicate vertices merged) in the input's face
     order, with per-face ``label`` and ``red green blue``.
+    With trimming curves (robust mode), ``boundaries.obj`` holds them
+    (:func:`write_boundary_curves`) and ``report.json`` a ``boundary_curves`` list.
     """
     t = time.perf_counter()
     out_dir = Path(out_dir)
@@ -232,6 +235,10 @@ def write_segmentation(
     surfaces = getattr(seg, "surfaces", None)
     if surfaces is not None:
         report["surfaces"] = [dict(segment=i, **s.to_dict()) for i, s in enumerate(surfaces)]
+    curves = getattr(seg, "boundary_curves", None)
+    if curves is not None:
+        write_boundary_curves(out_dir / "boundaries.obj", curves)
+        report["boundary_curves"] = [dict(curve=i, **c.to_dict()) for i, c in enumerate(curves)]
     report.update(extra or {})
     timings = dict(report.pop("timings", {}))
     timings.update(seg.timings)
@@ -241,6 +248,43 @@ def write_segmentation(
     report["timings"] = timings
     write_report(out_dir / "report.json", report)
     return report
+
+
+def write_boundary_curves(path: str | os.PathLike, curves: list) -> None:
+    """Trimming curves as OBJ polylines: one object ``curve_<i>_<left>_<right>_<method>`` per
+    curve (``left``/``right``: the segment labels on either side, ``-1`` for the mesh border),
+    its points as ``v`` lines and one ``l`` element through them (a closed curve ends on its
+    first point).
+
+    Parameters
+    ----------
+    path : path-like
+    curves : list of BoundaryCurve
+        :func:`igl_heatseg.surfaces.boundaries.boundary_curves` (``points (q, 3)``, ``left``,
+        ``right``, ``method``, ``closed``).
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from types import SimpleNamespace as C
+    >>> c = C(left=0, right=1, method="intersection", closed=False,
+    ...       points=np.array([[0.0, 0, 0], [1, 0, 0]]))
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     write_boundary_curves(f"{d}/b.obj", [c])
+    ...     print(open(f"{d}/b.obj").read().splitlines()[1:])
+    ['o curve_0_0_1_intersection', 'v 0 0 0', 'v 1 0 0', 'l 1 2']
+    """
+    lines = ["# igl_heatseg trimming curves: o curve_<i>_<left>_<right>_<method>"]
+    base = 1
+    for i, c in enumerate(curves):
+        P = np.asarray(c.points, dtype=np.float64)
+        q = len(P) - 1 if c.closed else len(P)
+        lines.append(f"o curve_{i}_{c.left}_{c.right}_{c.method}")
+        lines += ["v " + " ".join(f"{x:.17g}" for x in p) for p in P[:q]]
+        idx = list(range(base, base + q)) + ([base] if c.closed else [])
+        lines.append("l " + " ".join(map(str, idx)))
+        base += q
+    Path(path).write_text("\n".join(lines) + "\n")
 
 
 def _check_write(V, F, n_name: str) -> tuple[np.ndarray, np.ndarray]:

@@ -68,6 +68,7 @@ from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import edge_topology
+from ..surfaces.boundaries import boundary_curves
 from ..surfaces.refine import refine_segmentation
 from ..surfaces.segment_fit import fit_segments
 from ..surfaces.tolerance import vertex_tolerance
@@ -188,10 +189,16 @@ class RobustSegmentation(Segmentation):
         ``"off"``.
     surfaces : list of Surface, length k, or None
         The fitted surface of every segment (:mod:`igl_heatseg.surfaces`), when fitted.
+    boundary_curves : list of BoundaryCurve, or None
+        With the surfaces: the trimming curve of every boundary chain between two segments (or
+        a segment and the mesh border), on the two surfaces' intersection where it is well
+        conditioned, else the smoothed mesh chain
+        (:func:`igl_heatseg.surfaces.boundaries.boundary_curves`; validated-mesh positions).
     """
 
     primitive_types: list = field(default_factory=list)
     surfaces: list | None = None
+    boundary_curves: list | None = None
     primitive_rms: np.ndarray | None = None
     vertex_class: np.ndarray | None = None
     denoised_V: np.ndarray | None = None
@@ -520,7 +527,7 @@ def segment_robust(
         tol = min(tol, max(MERGE_TOL * h, vtol))
         labels1, _ = merge_by_primitives(W, F, labels1, tol, topo=topo)
         timings["merge"] = time.perf_counter() - t
-    labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
+    labels, vertex_labels, segment_areas, order, surfaces, curves, types, rms = _finish(
         V, F, W, N, h, labels1, hl1.vertex_labels, k1, refine, fit_surfaces, progress, timings,
         vtol,
     )
@@ -549,6 +556,7 @@ def segment_robust(
         mode="robust",
         primitive_types=types,
         surfaces=surfaces,
+        boundary_curves=curves,
         primitive_rms=np.asarray(rms, dtype=np.float64),
         vertex_class=cls,
         denoised_V=W,
@@ -563,7 +571,8 @@ def _fit_tolerance(V, F, merge, refine, fit_surfaces) -> float | None:
 
 def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings, vtol):
     """The common end of :func:`segment_robust`: refinement (``refine``: "full" or "off") or
-    one fit per segment, the final numbering, the old primitive types."""
+    one fit per segment, the final numbering, the trimming curves between the fitted segments,
+    the old primitive types."""
     n = V.shape[0]
     surfaces = None
     if refine != "off":  # split, merge and move
@@ -583,6 +592,11 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
         t = time.perf_counter()
         surfaces = fit_segments(V, F, labels, vtol, normals_from=W)
         timings["surfaces"] = time.perf_counter() - t
+    curves = None
+    if surfaces is not None:
+        t = time.perf_counter()
+        curves = boundary_curves(V, F, labels, surfaces, h, vtol)
+        timings["boundary_curves"] = time.perf_counter() - t
 
     t = time.perf_counter()
     diag = float(np.linalg.norm(W.max(axis=0) - W.min(axis=0)))
@@ -593,7 +607,7 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
         types.append(name)
         rms.append(r)
     timings["primitives"] = time.perf_counter() - t
-    return labels, vertex_labels, segment_areas, order, surfaces, types, np.asarray(rms)
+    return labels, vertex_labels, segment_areas, order, surfaces, curves, types, np.asarray(rms)
 
 
 def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit_surfaces, refine):
@@ -638,7 +652,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
                                      face_areas(V, F), topo)
     k1 = fine.num_segments
     N = face_normals(W, F)
-    labels, vertex_labels, segment_areas, order, surfaces, types, rms = _finish(
+    labels, vertex_labels, segment_areas, order, surfaces, curves, types, rms = _finish(
         V, F, W, N, h, labels1, fine.vertex_labels[:n], k1, refine, fit_surfaces,
         kw["progress"], timings, vtol,
     )
@@ -666,6 +680,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
         mode="robust",
         primitive_types=types,
         surfaces=surfaces,
+        boundary_curves=curves,
         primitive_rms=rms,
         vertex_class=fine.vertex_class[:n],
         denoised_V=W,

@@ -262,7 +262,18 @@ def test_types_stage_under_mock(mock_ps, box, box_robust):
     viz.init_polyscope("openGL_mock")
     info = viz.build_scene(mesh.V, mesh.F, box_robust, "types")
     assert info["stage"] == "types" and not info["planar"]
-    assert mock_ps.has_surface_mesh("mesh") and mock_ps.has_curve_network("segment boundaries")
+    # robust mode's trimming curves instead of the mesh edges (most of the box's edges on the
+    # intersection of their two planes; a chain beside a face dealt to the wrong side smoothed)
+    assert mock_ps.has_surface_mesh("mesh")
+    assert mock_ps.has_curve_network("trimming curves (intersection)")
+    assert not mock_ps.has_curve_network("segment boundaries")
+    methods = [c.method for c in box_robust.boundary_curves]
+    assert methods.count("intersection") > len(methods) / 2
+    untrimmed = copy.copy(box_robust)
+    untrimmed.boundary_curves = None
+    viz.init_polyscope("openGL_mock")
+    viz.build_scene(mesh.V, mesh.F, untrimmed, "types")
+    assert mock_ps.has_curve_network("segment boundaries")
     typed = copy.copy(paper)
     typed.surfaces = surfaces_of_every_kind()
     viz.init_polyscope("openGL_mock")

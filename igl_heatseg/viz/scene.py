@@ -19,8 +19,10 @@ Stages (:data:`STAGES`):
     The final segmentation (Fig. 13), segment boundaries as thin dark curves.
 ``types``
     Every face in the colour of its segment's fitted surface type
-    (:data:`SURFACE_TYPE_COLORS`), segment boundaries as curves; needs typed segments
-    (:func:`segment_surface_types`: robust mode today).
+    (:data:`SURFACE_TYPE_COLORS`); needs typed segments (:func:`segment_surface_types`: robust
+    mode today). The trimming curves (``seg.boundary_curves``) are drawn where the segmentation
+    has them: black on the intersection of two surfaces, red where smoothed along the mesh
+    (:func:`show_boundary_curves`); else the segment boundaries along the mesh edges.
 ``checker``
     Every chart's UV map as a checkerboard on the 3D mesh, cut paths as curves (Fig. 15).
 ``charts``
@@ -85,6 +87,7 @@ __all__ = [
     "show_surface_types",
     "segment_surface_types",
     "segment_boundary_edges",
+    "show_boundary_curves",
     "show_checker",
     "show_chart_maps",
 ]
@@ -120,6 +123,8 @@ MESH_COLOR = (0.82, 0.82, 0.80)
 NONSEED_COLOR = (0.12, 0.12, 0.12)
 SHARP_COLOR = (0.08, 0.08, 0.08)
 CUT_COLOR = (0.85, 0.05, 0.05)
+#: Trimming curves on the intersection of two surfaces, and smoothed along the mesh.
+CURVE_COLORS = {"intersection": (0.0, 0.0, 0.0), "smoothed": (0.80, 0.10, 0.10)}
 CHECKER_COLORS = ((0.97, 0.97, 0.97), (0.25, 0.25, 0.30))
 
 
@@ -572,6 +577,38 @@ def show_surface_types(V, F, seg, mesh_name: str = "mesh", enabled: bool = True)
     return kinds
 
 
+def show_boundary_curves(curves, radius: float = 2 * SHARP_RADIUS) -> dict:
+    """Trimming curves as two curve networks, ``trimming curves (intersection)`` and
+    ``trimming curves (smoothed)`` (:data:`CURVE_COLORS`).
+
+    Parameters
+    ----------
+    curves : list of BoundaryCurve
+        ``points (q, 3)`` polylines with a ``method`` each
+        (:func:`igl_heatseg.surfaces.boundaries.boundary_curves`).
+    radius : float
+        Relative to the scene's length scale.
+
+    Returns
+    -------
+    dict
+        Method -> the registered network (methods without curves are left out).
+    """
+    out = {}
+    for method, color in CURVE_COLORS.items():
+        P, E, n = [], [], 0
+        for c in curves:
+            if c.method != method or len(c.points) < 2:
+                continue
+            P.append(np.asarray(c.points, dtype=np.float64))
+            E.append(n + np.c_[np.arange(len(c.points) - 1), np.arange(1, len(c.points))])
+            n += len(c.points)
+        if P:
+            out[method] = add_curves(np.vstack(P), np.vstack(E), f"trimming curves ({method})",
+                                     color=color, radius=radius)
+    return out
+
+
 def show_checker(V, F, charts, mesh_name: str = "mesh", enabled: bool = True, cuts: bool = True):
     """Every chart's UV as a checkerboard on the 3D mesh, cut paths as red curves (Fig. 15).
 
@@ -747,5 +784,8 @@ def _add_stage_quantities(V, F, seg, stage: str, segment: int, all_quantities: b
             show_surface_types(V, F, seg, enabled=False)
         except ValueError:  # paper mode: no fitted types
             log.debug("no surface types to show")
-    if stage in ("final", "types"):
+    curves = getattr(seg, "boundary_curves", None) if stage == "types" else None
+    if curves:
+        show_boundary_curves(curves)
+    elif stage in ("final", "types"):
         add_curves(V, segment_boundary_edges(F, seg.labels), "segment boundaries")

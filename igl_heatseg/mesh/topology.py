@@ -489,7 +489,8 @@ def _pieces(cyc, opp_lab, src, dst, is_corner):
     return out
 
 
-def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> BoundaryGraph:
+def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int,
+                   inner_kinks: bool = True) -> BoundaryGraph:
     """Chains, loops and corners of a labelled, consistently oriented manifold mesh.
 
     Parameters
@@ -500,6 +501,10 @@ def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> 
         Segment of every face, ``0..k-1``.
     k : int
         Number of segments.
+    inner_kinks : bool
+        Kinks (turns over KINK_ANGLE) of a boundary between two segments are corners too (the
+        B-Rep's vertices); ``False``: only on the mesh border (a noisy boundary between two
+        segments zig-zags, and every tooth would end a chain).
 
     Returns
     -------
@@ -519,7 +524,7 @@ def boundary_graph(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> 
     sides = _vertex_sides(F, labels, src, opp, n)
     cycles = _trace_cycles(F, labels, src, dst, opp)
     corner = {v for v in range(n) if len(sides[v]) >= 3}
-    corner |= _kinks(V, cycles, src, dst)
+    corner |= {v for v in _kinks(V, cycles, src, dst) if inner_kinks or -1 in sides[v]}
     outgoing = np.zeros(n, np.int64)
     for _, cyc, _ in cycles:
         np.add.at(outgoing, src[cyc], 1)

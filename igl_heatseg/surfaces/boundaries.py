@@ -259,7 +259,7 @@ def boundary_curves(V, F, labels, surfaces, mean_edge: float | None = None,
     if mean_edge is None:
         E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
         mean_edge = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
-    graph = boundary_graph(V, F, labels, k)
+    graph = boundary_graph(V, F, labels, k, inner_kinks=False)
     on_tol = ON_SURFACE_REL * mean_edge
     pins = [s.is_analytic for s in surfaces] & (np.bincount(labels, minlength=k) >= EVIDENCE_FACES)
     tol = vertex_tolerance(V, F) if tol is None else float(tol)

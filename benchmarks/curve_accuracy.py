@@ -8,7 +8,7 @@ runs on the part as stored (noisy or not); for every curve between two segments
 the nearest true edge is taken, and the same for the mesh chain it came from (its vertices at
 their stored, noisy positions). Distances are in mean edge lengths of the part.
 
-Output: one JSON line per part (``OUT``) with, per method (``intersection``, ``smoothed``), the
+Output: one JSON line per part (``OUT``) with, per method (``intersection``, ``smoothed``, ``chain``), the
 number of curves, their length, and mean / 90th percentile distance of the curve points and of
 the chain vertices; and a summary on stdout (length-weighted over the parts).
 
@@ -35,7 +35,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-METHODS = ("intersection", "smoothed")
+METHODS = ("intersection", "smoothed", "chain")
 
 
 def segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:

@@ -186,7 +186,7 @@ def test_segment_robust_mode_reports_primitives_and_scores_better(tmp_path, data
             assert sum(ln.startswith("l ") for ln in obj) == len(curves) > 0
             assert all(-1 <= c["left"] < rep["segments"] and c["right"] < rep["segments"]
                        for c in curves)
-            assert {c["method"] for c in curves} <= {"intersection", "smoothed"}
+            assert {c["method"] for c in curves} <= {"intersection", "smoothed", "chain"}
         else:
             assert not (out / "boundaries.obj").exists()
     # the paper's mode merges this thin frame into 2 segments (24 true faces)

@@ -603,9 +603,12 @@ def _face_connected(F, labels, TT=None) -> np.ndarray:
 
 
 def _split(V, F, faces, tol, FN, TT, W, ratio, exact):
-    """Region growing, then RANSAC (:func:`~igl_heatseg.surfaces.split.ransac_regions`), until
-    one finds real faces (:func:`~igl_heatseg.surfaces.split.real_split`); ``(None, None)``."""
-    for how in ("grow", "ransac"):
+    """Region growing, then on a noisy mesh RANSAC
+    (:func:`~igl_heatseg.surfaces.split.ransac_regions`), until one finds real faces
+    (:func:`~igl_heatseg.surfaces.split.real_split`); else ``(None, None)``. On an exact
+    tessellation growth is held to round-off and does not stall on small holes, and RANSAC
+    shattered freeform blends (fandisk robust: 36 -> 87 segments, 50 one-face)."""
+    for how in ("grow",) if exact else ("grow", "ransac"):
         if how == "grow":
             sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact)
         else:

@@ -9,7 +9,7 @@ hole and the plane ring around it stay one unexplained segment. RANSAC (Schnabel
 draws its candidates from the whole segment instead: a plane from one face, a cylinder from one
 face's rings (axis: the direction least seen in their normals), keeps the candidate whose
 consistent faces hold most area, refits it to its connected faces and takes them out; then again
-on what is left.
+on what is left. The refinement runs it on noisy meshes only, when growth finds no real split.
 """
 
 from __future__ import annotations

@@ -21,8 +21,9 @@ Stages (:data:`STAGES`):
     Every face in the colour of its segment's fitted surface type
     (:data:`SURFACE_TYPE_COLORS`); needs typed segments (:func:`segment_surface_types`: robust
     mode today). The trimming curves (``seg.boundary_curves``) are drawn where the segmentation
-    has them: black on the intersection of two surfaces, red where smoothed along the mesh
-    (:func:`show_boundary_curves`); else the segment boundaries along the mesh edges.
+    has them: black on the intersection of two surfaces, red along the mesh (smoothed, or the
+    chain of an exact tessellation) (:func:`show_boundary_curves`); else the segment boundaries
+    along the mesh edges.
 ``checker``
     Every chart's UV map as a checkerboard on the 3D mesh, cut paths as curves (Fig. 15).
 ``charts``
@@ -124,7 +125,8 @@ NONSEED_COLOR = (0.12, 0.12, 0.12)
 SHARP_COLOR = (0.08, 0.08, 0.08)
 CUT_COLOR = (0.85, 0.05, 0.05)
 #: Trimming curves on the intersection of two surfaces, and smoothed along the mesh.
-CURVE_COLORS = {"intersection": (0.0, 0.0, 0.0), "smoothed": (0.80, 0.10, 0.10)}
+CURVE_COLORS = {"intersection": (0.0, 0.0, 0.0), "smoothed": (0.80, 0.10, 0.10),
+                "chain": (0.80, 0.10, 0.10)}
 CHECKER_COLORS = ((0.97, 0.97, 0.97), (0.25, 0.25, 0.30))
 
 
@@ -578,8 +580,8 @@ def show_surface_types(V, F, seg, mesh_name: str = "mesh", enabled: bool = True)
 
 
 def show_boundary_curves(curves, radius: float = 2 * SHARP_RADIUS) -> dict:
-    """Trimming curves as two curve networks, ``trimming curves (intersection)`` and
-    ``trimming curves (smoothed)`` (:data:`CURVE_COLORS`).
+    """Trimming curves as one curve network per method, ``trimming curves (intersection)``,
+    ``... (smoothed)``, ``... (chain)`` (:data:`CURVE_COLORS`).
 
     Parameters
     ----------

@@ -113,3 +113,27 @@ def sphere(levels: int = 4):
         V, F = igl.upsample(V, F)
         V = V / np.linalg.norm(V, axis=1, keepdims=True)
     return V, F
+
+
+def plane_into_cylinder(noise: float, seed: int = 0, h: float = 0.25, R: float = 4.0):
+    """A plane z = 0 (x < 0) running tangentially into a cylinder of radius R (axis along y
+    at height R), gridded by arc length s in [-6, 6] and y in [0, 6], vertices moved by Gaussian
+    noise: V, F (consistently oriented), the arc length of each face's centroid, and the two
+    exact surfaces {0: plane, 1: cylinder}."""
+    from igl_heatseg.surfaces.model import Surface
+
+    s, y = np.meshgrid(np.arange(-6, 6 + h / 2, h), np.arange(0, 6 + h / 2, h), indexing="ij")
+    s, y = s.ravel(), y.ravel()
+    phi = np.maximum(s, 0) / R
+    V = np.c_[np.where(s < 0, s, R * np.sin(phi)), y, np.where(s < 0, 0, R - R * np.cos(phi))]
+    ns, ny = len(np.arange(-6, 6 + h / 2, h)), len(np.arange(0, 6 + h / 2, h))
+    idx = np.arange(ns * ny).reshape(ns, ny)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
+    plane = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
+    cyl = Surface("cylinder", {"point": np.array([0.0, 0, R]), "axis": np.array([0.0, 1, 0]),
+                               "radius": R})
+    S = np.r_[s][F].mean(axis=1)  # arc length of each face's centroid
+    return V, F, S, {0: plane, 1: cyl}

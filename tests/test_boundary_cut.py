@@ -8,6 +8,7 @@ import itertools
 import igl
 import numpy as np
 import pytest
+from meshes import plane_into_cylinder
 
 from igl_heatseg.evaluation.surfaces import boundary_length
 from igl_heatseg.mesh.geometry import face_areas
@@ -53,33 +54,13 @@ def test_binary_min_cut_rejects_bad_input(args, match):
         binary_min_cut(*args)
 
 
-def _plane_into_cylinder(noise: float, seed: int = 0, h: float = 0.25, R: float = 4.0):
-    """A plane z = 0 (x < 0) running tangentially into a cylinder of radius R (axis along y
-    at height R), gridded by arc length s in [-6, 6] and y in [0, 6]."""
-    s, y = np.meshgrid(np.arange(-6, 6 + h / 2, h), np.arange(0, 6 + h / 2, h), indexing="ij")
-    s, y = s.ravel(), y.ravel()
-    phi = np.maximum(s, 0) / R
-    V = np.c_[np.where(s < 0, s, R * np.sin(phi)), y, np.where(s < 0, 0, R - R * np.cos(phi))]
-    ns, ny = len(np.arange(-6, 6 + h / 2, h)), len(np.arange(0, 6 + h / 2, h))
-    idx = np.arange(ns * ny).reshape(ns, ny)
-    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
-    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
-    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
-    plane = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, 1])})
-    cyl = Surface("cylinder", {"point": np.array([0.0, 0, R]), "axis": np.array([0.0, 1, 0]),
-                               "radius": R})
-    S = np.r_[s][F].mean(axis=1)  # arc length of each face's centroid
-    return V, F, S, {0: plane, 1: cyl}
-
-
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_tangent_join_zigzag_is_straightened(seed):
     """The plane and the cylinder are within the noise of each other over a band of faces, and
     the initial boundary wanders through it (as the heat fields leave it): the cut makes it
     the straight line it is, about where it is."""
     h, noise = 0.25, 0.025
-    V, F, S, fits = _plane_into_cylinder(noise, seed, h)
+    V, F, S, fits = plane_into_cylinder(noise, seed, h)
     truth = (S > 0).astype(np.int64)
     y = V[F][:, :, 1].mean(axis=1)
     labels = (S > 0.6 * np.sin(2.0 * y) + np.random.default_rng(seed).normal(0, 0.15, len(F))

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import igl
 import numpy as np
 import scipy.sparse as sp
 
@@ -266,9 +267,7 @@ def boundary_curves(V, F, labels, surfaces, mean_edge: float | None = None,
     F = np.asarray(F, dtype=np.int64)
     labels = np.asarray(labels, dtype=np.int64)
     k = len(surfaces)
-    if mean_edge is None:
-        E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
-        mean_edge = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+    mean_edge = float(igl.avg_edge_length(V, F)) if mean_edge is None else float(mean_edge)
     graph = boundary_graph(V, F, labels, k, inner_kinks=False)
     on_tol = ON_SURFACE_REL * mean_edge
     tol = vertex_tolerance(V, F) if tol is None else float(tol)

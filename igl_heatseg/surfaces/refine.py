@@ -53,7 +53,9 @@ from .split import (
     SPLIT_GOOD_SHARE,
     SPLIT_RMS_RATIO,
     SPLIT_RMS_RATIO_NOISY,
+    consistent_faces,
     evidence,
+    face_pieces,
     fold_weak,
     ransac_regions,
     real_split,
@@ -160,12 +162,6 @@ def _adjacency(F: np.ndarray) -> np.ndarray:
     return TT
 
 
-def _fits_face(V, F, FN, faces, s, tol, k_tol):
-    return (corner_rms(V, F, faces, s) <= k_tol * tol) & (
-        normal_angle(V, F, FN, faces, s) <= GROW_ANGLE
-    )
-
-
 def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
     """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface, own): the
     surface is a freeform one when no surface explains the seed's patch (its SEED_RINGS rings);
@@ -192,7 +188,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         cand = np.unique(TT[region].ravel())
         cand = cand[(cand >= 0)]
         cand = cand[free[cand] & ~region[cand]]
-        ok = _fits_face(V, F, FN, cand, s, tol, GROW_TOL) if len(cand) else np.zeros(0, bool)
+        ok = consistent_faces(V, F, FN, cand, s, tol, GROW_TOL) if len(cand) else np.zeros(0, bool)
         if ok.any():
             region[cand[ok]] = True
             stalled = False
@@ -204,7 +200,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
             continue
         if stalled or not len(cand):
             break
-        near = cand[_fits_face(V, F, FN, cand, s, tol, STALL_TOL)]
+        near = cand[consistent_faces(V, F, FN, cand, s, tol, STALL_TOL)]
         if not len(near):
             break
         s2 = fit_faces(V, F, np.r_[np.flatnonzero(region), near], tol, W=W, FN=FN)
@@ -304,11 +300,7 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
                 return np.zeros(len(faces), dtype=np.int64)
     rest = faces[out[faces] < 0]
     if len(rest):  # what no surface explains: its connected pieces
-        sub = np.full(len(F), -1, dtype=np.int64)
-        sub[rest] = 0
-        comp = _face_connected(F, np.where(out >= 0, out, len(F) + 1 + sub), TT)
-        _, inv = np.unique(comp[rest], return_inverse=True)
-        out[rest] = r + inv
+        out[rest] = r + face_pieces(F, TT, rest)
     return out[faces]
 
 

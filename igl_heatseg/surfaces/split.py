@@ -34,6 +34,8 @@ from .segment_fit import (
 
 __all__ = [
     "ransac_regions",
+    "consistent_faces",
+    "face_pieces",
     "cylinder_from_normals",
     "evidence",
     "fold_weak",
@@ -77,8 +79,32 @@ RANSAC_REFITS = 3
 FLAT_SCATTER = 1e-3
 
 
-def _consistent(V, F, FN, faces, s, tol, k_tol, angle) -> np.ndarray:
+def consistent_faces(V, F, FN, faces, s, tol, k_tol, angle=GROW_ANGLE) -> np.ndarray:
+    """Per face of ``faces``: its corners within ``k_tol`` x tol of ``s`` (RMS) and its normal
+    within ``angle`` of ``s``'s (region growing's test, :data:`GROW_TOL`, :data:`GROW_ANGLE`).
+
+    Returns
+    -------
+    (f,) bool
+    """
     return (corner_rms(V, F, faces, s) <= k_tol * tol) & (normal_angle(V, F, FN, faces, s) <= angle)
+
+
+def face_pieces(F, TT, faces) -> np.ndarray:
+    """Edge-connected pieces of the face set ``faces`` on its own (its faces joined only
+    through each other): piece ``0..p-1`` of each, numbered by their smallest face.
+
+    Examples
+    --------
+    >>> import igl, numpy as np
+    >>> F = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4]])
+    >>> face_pieces(F, igl.triangle_triangle_adjacency(F)[0], np.array([0, 2, 3])).tolist()
+    [0, 1, 1]
+    """
+    lab = np.full(len(F), -1, dtype=np.int64)
+    lab[faces] = 0
+    _, inv = np.unique(label_pieces(F, lab, TT)[faces], return_inverse=True)
+    return inv.reshape(-1).astype(np.int64)
 
 
 def cylinder_from_normals(C, N, size: float) -> Surface | None:
@@ -142,11 +168,8 @@ def _rings(TT, inside, f, rings):
 
 def _largest_piece(F, TT, faces, idx):
     """The positions ``idx`` (into ``faces``) of the largest edge-connected piece."""
-    lab = np.full(len(F), -1, dtype=np.int64)
-    lab[faces[idx]] = 0
-    pid = label_pieces(F, lab, TT)[faces[idx]]
-    vals, cnt = np.unique(pid, return_counts=True)
-    return idx[pid == vals[cnt.argmax()]]
+    pid = face_pieces(F, TT, faces[idx])
+    return idx[pid == np.bincount(pid).argmax()]
 
 
 def ransac_regions(V, F, faces, tol, FN, TT, W=None) -> np.ndarray:
@@ -219,12 +242,13 @@ def ransac_regions(V, F, faces, tol, FN, TT, W=None) -> np.ndarray:
                 cyl = cylinder_from_normals(C[pos[patch]], FN[patch], size)
                 cands += [cyl] if cyl is not None else []
             for s in cands:
-                ok = _consistent(V, F, FN, faces[rem], s, tol, RANSAC_TOL, RANSAC_ANGLE)
-                if A[rem[ok]].sum() > best_area:
-                    best, best_area = s, A[rem[ok]].sum()
+                ok = consistent_faces(V, F, FN, faces[rem], s, tol, RANSAC_TOL, RANSAC_ANGLE)
+                area = A[rem[ok]].sum()
+                if area > best_area:
+                    best, best_area = s, area
         region, s = None, best
         for _ in range(RANSAC_REFITS if best is not None else 0):
-            idx = rem[_consistent(V, F, FN, faces[rem], s, tol, GROW_TOL, GROW_ANGLE)]
+            idx = rem[consistent_faces(V, F, FN, faces[rem], s, tol, GROW_TOL)]
             if len(idx) < MIN_REGION_FACES:
                 break
             idx = _largest_piece(F, TT, faces, idx)
@@ -238,10 +262,7 @@ def ransac_regions(V, F, faces, tol, FN, TT, W=None) -> np.ndarray:
         r += 1
     rest = np.flatnonzero(out < 0)
     if len(rest):
-        lab = np.full(len(F), -1, dtype=np.int64)
-        lab[faces[rest]] = 0
-        _, inv = np.unique(label_pieces(F, lab, TT)[faces[rest]], return_inverse=True)
-        out[rest] = r + inv
+        out[rest] = r + face_pieces(F, TT, faces[rest])
     return out
 
 

@@ -194,28 +194,6 @@ def seam_away_from(s: Surface, P: np.ndarray) -> float:
     return float(th[i] + 0.5 * gaps[i])
 
 
-def _analytic_gradient(s: Surface, X: np.ndarray) -> np.ndarray:
-    """Gradient of ``s.distance`` at points X on the surface (unit, pointing to d > 0)."""
-    p = s.params
-    if s.kind == "plane":
-        return np.broadcast_to(p["normal"], X.shape).copy()
-    if s.kind == "sphere":
-        D = X - p["center"]
-        return D / np.maximum(np.linalg.norm(D, axis=1), 1e-300)[:, None]
-    origin = p["point"] if s.kind == "cylinder" else p.get("apex", p.get("center"))
-    a = p["axis"]
-    Q = X - origin
-    R = Q - np.outer(Q @ a, a)
-    r = np.linalg.norm(R, axis=1)
-    U = np.where(r[:, None] > 0, R / np.maximum(r, 1e-300)[:, None], _any_perp(a))
-    if s.kind == "cylinder":
-        return U
-    if s.kind == "cone":
-        return math.cos(p["half_angle"]) * U - math.sin(p["half_angle"]) * a
-    D = X - (origin + p["major_radius"] * U)
-    return D / np.maximum(np.linalg.norm(D, axis=1), 1e-300)[:, None]
-
-
 class Projector:
     """Signed distance and its gradient for one segment's surface (analytic or B-spline).
 
@@ -238,7 +216,7 @@ class Projector:
         """Signed distances ``(p,)`` and unit gradients ``(p,3)`` at points ``P (p,3)``."""
         if self.surface is not None:
             X = self.surface.project(P)
-            return self.surface.distance(P), _analytic_gradient(self.surface, X)
+            return self.surface.distance(P), self.surface.normals(X)
         d = np.zeros(len(P))
         N = np.zeros((len(P), 3))
         for i, q in enumerate(P):

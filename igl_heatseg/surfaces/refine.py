@@ -36,6 +36,7 @@ import numpy as np
 
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
+from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
 from .samples import segment_adjacency, vertex_samples
 from .segment_fit import (
@@ -146,6 +147,9 @@ class SurfaceSegmentation:
     moved : int
         Boundary faces moved (step 4).
     timings : dict
+    coaxial : int
+        Planes retyped as cylinders or cones about the part's axes
+        (:func:`~igl_heatseg.surfaces.axes.snap_to_axes`).
     """
 
     labels: np.ndarray
@@ -155,6 +159,7 @@ class SurfaceSegmentation:
     merged: int = 0
     moved: int = 0
     timings: dict = field(default_factory=dict)
+    coaxial: int = 0
 
 
 def _adjacency(F: np.ndarray) -> np.ndarray:
@@ -773,8 +778,9 @@ def refine_segmentation(
     labels = rank[inv].astype(np.int64)
     surfaces = [fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
                 for k in range(len(order))]
+    surfaces, coaxial = snap_to_axes(V, F, labels, surfaces, tol, W, FN)
     timings["final_fit"] = time.perf_counter() - t
     progress("surfaces", 1.0)
-    log.info("surfaces: %d segments (%d split, %d merges, %d faces moved), tol %.3g",
-             len(surfaces), n_split, merged, moved, tol)
-    return SurfaceSegmentation(labels, surfaces, tol, n_split, merged, moved, timings)
+    log.info("surfaces: %d segments (%d split, %d merges, %d faces moved, %d planes made "
+             "coaxial), tol %.3g", len(surfaces), n_split, merged, moved, coaxial, tol)
+    return SurfaceSegmentation(labels, surfaces, tol, n_split, merged, moved, timings, coaxial)

@@ -598,3 +598,30 @@ def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     graph1 = BoundaryGraph(chains=[], loops=[[], [], []], corners=np.array([0]),
                            vertex_sides={0: (0, 1, 2)})
     assert np.allclose(cad_build._place_vertices(V, graph1, projs, ctx)[0], [1.0, 1.0, 1.0])
+
+
+def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
+    from OCP.BRepGProp import BRepGProp
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.GProp import GProp_GProps
+
+    from igl_heatseg.cad import fidelity
+
+    V, F, _ = box_mesh(4)
+    box = BRepPrimAPI_MakeBox(gp_Pnt(-1, -1, -1), 2.0, 2.0, 2.0).Shape()
+
+    def centre_z(face):
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(face, props)
+        return props.CentreOfMass().Z()
+
+    top = [f for f in faces_of(box) if centre_z(f) > 0.99]
+    assert len(top) == 1
+    real = fidelity._face_triangles
+    monkeypatch.setattr(fidelity, "_face_triangles",
+                        lambda face, d: None if face.IsSame(top[0]) else real(face, d))
+    fid = brep_fidelity(box, V, F)
+    assert fid["faces_not_tessellated"] == 1
+    # the top's mesh vertices are on the top face: exact distances, not the 1.0 to the sides
+    assert fid["hausdorff_mesh_to_brep"] < 1e-9

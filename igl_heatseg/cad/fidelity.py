@@ -175,11 +175,17 @@ def _face_triangles(face, deflection: float):
 
 def _triangles(shape, deflection: float):
     """:func:`tessellate` of a shape already meshed."""
-    Vs, Fs, off, missing = [], [], 0, 0
+    TV, TF, missing = _triangles_and_missing(shape, deflection)
+    return TV, TF, len(missing)
+
+
+def _triangles_and_missing(shape, deflection: float):
+    """(TV, TF, the faces left untessellated) of a shape already meshed."""
+    Vs, Fs, off, missing = [], [], 0, []
     for face in faces_of(shape):
         got = _face_triangles(face, deflection)
         if got is None:
-            missing += 1
+            missing.append(face)
             continue
         Vs.append(got[0])
         Fs.append(got[1] + off)
@@ -256,22 +262,25 @@ def _distances(shape, V, F, diag):
     """(two-sided Hausdorff, RMS and max of mesh vertices -> B-Rep, untessellated faces, the
     largest deflection used)."""
     deflection = mesh_faces(shape, MESH_DEFLECTION_REL * diag)
-    TV, TF, missing = _triangles(shape, MESH_DEFLECTION_REL * diag)
+    TV, TF, missing = _triangles_and_missing(shape, MESH_DEFLECTION_REL * diag)
     if len(TF) == 0:
-        return math.inf, math.inf, math.inf, missing, deflection
+        return math.inf, math.inf, math.inf, len(missing), deflection
     d_mesh = np.sqrt(igl.point_mesh_squared_distance(V, TV, TF)[0])  # mesh vertices -> B-Rep
-    if missing:  # vertices of untessellated faces: exact distances to the shape
+    if missing:  # vertices of untessellated faces: exact distances to those faces (the rest
+        # of the shape is in the tessellation; against the whole shape, 2000 queries on a
+        # 5898-face B-Rep took 150 s)
         far = np.argsort(d_mesh)[::-1][:EXACT_DISTANCE_MAX]
         far = far[d_mesh[far] > 10 * MESH_DEFLECTION_REL * diag]
         for i in far:
-            dist = BRepExtrema_DistShapeShape(
-                BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, V[i]))).Vertex(), shape)
-            if dist.IsDone():
-                d_mesh[i] = min(d_mesh[i], dist.Value())
+            vertex = BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, V[i]))).Vertex()
+            for face in missing:
+                dist = BRepExtrema_DistShapeShape(vertex, face)
+                if dist.IsDone():
+                    d_mesh[i] = min(d_mesh[i], dist.Value())
     d_brep = np.sqrt(igl.point_mesh_squared_distance(TV, V, F)[0])  # B-Rep samples -> mesh
     d = np.r_[d_mesh, d_brep]
-    return (float(d.max()), float(np.sqrt(np.mean(d_mesh**2))), float(d_mesh.max()), missing,
-            deflection)
+    return (float(d.max()), float(np.sqrt(np.mean(d_mesh**2))), float(d_mesh.max()),
+            len(missing), deflection)
 
 
 def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:

@@ -6,7 +6,7 @@ simplest kind within tolerance is a plane, and a free cylinder fitted to it is i
 (its radius is barely determined). But a turned part has few axes, and its large cylinders,
 cones and tori give them. About one of those axes, a cylinder has one parameter (its radius)
 and a cone two (its radius at a height and its slope), against a plane's three: the coaxial
-surface is the simpler model when it fits the band at least as well. The choice is made by
+surface is the simpler model when it fits the band as well. The choice is made by
 the Bayesian information criterion ``n log(rms^2) + k log(n)`` over the band's ``n`` vertices,
 and only when the coaxial surface's RMS is below the plane's (a flat parallel to an axis is
 never made a cylinder by the parameter count alone).
@@ -127,10 +127,11 @@ def coaxial_surfaces(P, N, w, point, axis) -> list:
     Returns
     -------
     list of Surface
-        The cylinder (radius: the weighted mean distance to the axis), then the cone whose
-        radius is linear in the height along the axis (weighted least squares) when its half
-        angle lies in [CONE_MIN_ANGLE, CONE_MAX_ANGLE]; ``rms`` and ``max_dev`` over the
-        points, ``area`` nan.
+        The cylinder (radius: the weighted mean distance to the axis; point: the foot of the
+        points' weighted centroid on the axis), then the cone whose radius is linear in the
+        height along the axis (weighted least squares) when its half angle lies in
+        [CONE_MIN_ANGLE, CONE_MAX_ANGLE]; ``rms`` and ``max_dev`` over the points, ``area``
+        nan.
 
     Examples
     --------
@@ -140,15 +141,18 @@ def coaxial_surfaces(P, N, w, point, axis) -> list:
     >>> P = np.c_[r * np.cos(t.ravel()), r * np.sin(t.ravel()), h.ravel()]
     >>> N = np.c_[np.cos(t.ravel()), np.sin(t.ravel()), np.zeros(20)]
     >>> cyl, cone = coaxial_surfaces(P, N, np.full(20, 0.05), np.zeros(3), np.array([0., 0, 1]))
-    >>> round(cyl.params["radius"], 6), round(cone.rms, 9), round(math.tan(cone.params["half_angle"]), 6)
-    (2.25, 0.0, 0.5)
+    >>> round(cyl.params["radius"], 6), cyl.params["point"].round(6).tolist()
+    (2.25, [0.0, 0.0, 0.5])
+    >>> round(cone.rms, 9), round(math.tan(cone.params["half_angle"]), 6)
+    (0.0, 0.5)
     """
+    point = np.asarray(point, dtype=np.float64)
+    axis = np.asarray(axis, dtype=np.float64)
     Q = P - point
     h = Q @ axis
     d = np.linalg.norm(Q - np.outer(h, axis), axis=1)
-    out = [_finish("cylinder", {"point": np.asarray(point, dtype=np.float64),
-                                "axis": np.asarray(axis, dtype=np.float64),
-                                "radius": float(w @ d)}, P, N, w)]
+    foot = point + float(w @ h) * axis  # the model's convention: the foot of the centroid
+    out = [_finish("cylinder", {"point": foot, "axis": axis, "radius": float(w @ d)}, P, N, w)]
     sw = np.sqrt(w)
     (c0, c1), *_ = np.linalg.lstsq(np.c_[sw, sw * h], sw * d, rcond=None)
     if math.tan(CONE_MIN_ANGLE) <= abs(c1) <= math.tan(CONE_MAX_ANGLE):

@@ -16,7 +16,10 @@ two ABC parts clean and with Gaussian noise of 0.1 x the mean edge length along 
 mesh2cad (PyPI, MIT) needs Python >= 3.12 and OCP < 8: it gets its own venv (``--m2c-venv``,
 created with pyenv's 3.12 interpreter when missing, then ``pip install mesh2cad``) and runs as
 ``mesh2cad convert PART.obj -o PART.step`` with a :data:`M2C_TIMEOUT` s timeout.  The two
-tools run side by side (two queues, one process each) on the same machine.
+tools run side by side (two queues, one process each) on the same machine.  Each result
+records the commit it was run at and when; a cached result of ours from another commit is run
+again, and the table's header says at which commits its rows were run and whether the two
+tools ran side by side.
 
 Results are cached per tool and part in ``WORK/results`` (a rerun continues); ``--table``
 only writes the table from the cache.
@@ -235,21 +238,43 @@ def step_of(work: Path, tool: str, name: str) -> Path:
         work / "mesh2cad" / f"{name}.step"
 
 
+def _commit() -> str:
+    """Short hash of this checkout's HEAD, ``+dirty`` when tracked files are modified."""
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+                          capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain",
+                            "--untracked-files=no"], capture_output=True, text=True).stdout.strip()
+    return head + ("+dirty" if dirty else "")
+
+
+def _stale(tool: str, res: dict, commit: str) -> bool:
+    """A cached result of ours from another commit (or from before commits were recorded):
+    the table must not print the current commit over it. mesh2cad's do not depend on it."""
+    return tool == "ours" and res.get("commit") != commit
+
+
 def run_queue(tool: str, parts: list[dict], work: Path, fn) -> None:
-    """Run ``fn`` on every part without a cached result (``fn`` None: only score again the
-    cached results scored before the surface samples existed)."""
+    """Run ``fn`` on every part without a cached result of this commit (``fn`` None: only
+    score again the cached results scored before the surface samples existed)."""
+    commit = _commit()
     for part in parts:
         path = _cached(work, tool, part["name"])
         if fn is None and not path.exists():
             continue
         if path.exists():
             res = json.loads(path.read_text())
-            if res["status"] == "ok" and "sampled_rel" not in res:  # scored before sampling
-                res.update(score(step_of(work, tool, part["name"]), part["obj"]))
-                path.write_text(json.dumps(res, indent=1, default=float) + "\n")
-            continue
+            if fn is not None and _stale(tool, res, commit):
+                print(f"{tool:8s} {part['name']:40s} cached at {res.get('commit', '?')}, "
+                      f"now {commit}: run again", flush=True)
+            else:
+                if res["status"] == "ok" and "sampled_rel" not in res:  # scored before sampling
+                    res.update(score(step_of(work, tool, part["name"]), part["obj"]))
+                    path.write_text(json.dumps(res, indent=1, default=float) + "\n")
+                continue
+        start = datetime.datetime.now(datetime.timezone.utc)
         res = fn(part)
-        res.update(name=part["name"])
+        res.update(name=part["name"], commit=commit, started=f"{start:%Y-%m-%d %H:%M:%S}",
+                   ended=f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M:%S}")
         path.write_text(json.dumps(res, indent=1, default=float) + "\n")
         print(f"{tool:8s} {part['name']:40s} {res['status']:10s} {res['seconds']:7.1f} s "
               f"exact={res.get('exact')} haus={res.get('hausdorff_rel')}", flush=True)
@@ -288,12 +313,14 @@ def _cell(r: dict | None, ours: bool) -> list[str]:
 
 def write_table(parts: list[dict], work: Path, md: Path, command: str) -> str:
     rows, counts = [], {t: dict(valid=0, exact=0, seconds=0.0, n=0) for t in ("ours", "mesh2cad")}
+    loaded: dict = {"ours": [], "mesh2cad": []}
     for p in parts:
         res = {}
         for tool in ("ours", "mesh2cad"):
             path = _cached(work, tool, p["name"])
             res[tool] = json.loads(path.read_text()) if path.exists() else None
             r = res[tool]
+            loaded[tool].append(r)
             if r is not None and r["status"] == "ok" and tool == "ours":
                 r["exact"] = bool(r["exact"] and r["faceted_segments"] == 0)
             if r is not None:
@@ -306,10 +333,19 @@ def write_table(parts: list[dict], work: Path, md: Path, command: str) -> str:
         rows.append(f"| {p['name']} | {p['triangles']} | {p['true_faces']} | "
                     + " | ".join(_cell(res["ours"], True)) + " | "
                     + " | ".join(_cell(res["mesh2cad"], False)) + " |")
-    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain",
-                            "--untracked-files=no"], capture_output=True, text=True).stdout.strip()
+    commit = _commit()
+    runs = {t: [r for r in loaded[t] if r is not None] for t in loaded}
+    ours_commits = sorted({r.get("commit", "unrecorded") for r in runs["ours"]})
+    spans = {t: (min(r["started"] for r in rs), max(r["ended"] for r in rs))
+             if rs and all("started" in r for r in rs) else None for t, rs in runs.items()}
+    if spans["ours"] and spans["mesh2cad"]:
+        (a0, a1), (b0, b1) = spans["ours"], spans["mesh2cad"]
+        overlap = a0 < b1 and b0 < a1
+        how = ("the two tools ran side by side, one process each, so their seconds include "
+               "waiting for a core" if overlap else "the two tools ran one after the other")
+    else:
+        how = "when the tools ran is not recorded for every result"
+    span_text = "; ".join(f"{t} {s[0]} to {s[1]} UTC" for t, s in spans.items() if s)
     cpu = next((ln.split(":", 1)[1].strip() for ln in
                 Path("/proc/cpuinfo").read_text().splitlines() if ln.startswith("model name")),
                platform.processor())
@@ -319,10 +355,11 @@ def write_table(parts: list[dict], work: Path, md: Path, command: str) -> str:
         "# B-Rep benchmark: `igl-heatseg cad` beside mesh2cad",
         "",
         f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
-        f"- commit: {commit}{' (working tree with uncommitted changes)' if dirty else ''}",
+        f"- commit of this checkout: {commit}; our rows were run at: "
+        f"{', '.join(ours_commits) or '-'}",
         f"- machine: {platform.node()}, {cpu}, {os.cpu_count()} cores shared with other jobs "
-        f"(load average {os.getloadavg()[0]:.1f} when the table was written); both tools ran "
-        "side by side, one process each, so their seconds include waiting for a core",
+        f"(load average {os.getloadavg()[0]:.1f} when the table was written); {how}"
+        f"{' (' + span_text + ')' if span_text else ''}",
         f"- command: `{command}`",
         f"- ours: `igl-heatseg cad PART.obj -o DIR --no-pictures` (robust mode, default "
         "tolerance 1 % of the bbox diagonal); "

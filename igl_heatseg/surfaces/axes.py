@@ -20,6 +20,7 @@ import numpy as np
 
 from ..mesh.geometry import face_areas, face_normals
 from .model import Surface
+from .primitives import fitted_surface
 from .samples import vertex_samples
 from .segment_fit import explains, normals_agree
 
@@ -102,15 +103,7 @@ def part_axes(V, F, labels, surfaces, tol: float) -> list:
     return [(g[0], g[1]) for g in groups]
 
 
-def _finish(kind, params, P, N, w) -> Surface:
-    s = Surface(kind, params)
-    d = s.distance(P)
-    outward = bool(w @ np.einsum("ij,ij->i", N, s.normals(P)) >= 0)
-    return Surface(kind, params, rms=math.sqrt(float(w @ (d * d))),
-                   max_dev=float(np.abs(d).max()), area=math.nan, outward=outward)
-
-
-def coaxial_surfaces(P, N, w, point, axis) -> list:
+def coaxial_surfaces(P, N, w, point, axis, area: float = math.nan) -> list:
     """The least-squares cylinder, and cone when its slope is in range, about a given axis.
 
     Parameters
@@ -123,6 +116,8 @@ def coaxial_surfaces(P, N, w, point, axis) -> list:
         Non-negative weights, summing to 1.
     point, axis : (3,) float64
         A point on the axis and its unit direction.
+    area : float, optional
+        The ``area`` the surfaces record (the segment's).
 
     Returns
     -------
@@ -130,8 +125,9 @@ def coaxial_surfaces(P, N, w, point, axis) -> list:
         The cylinder (radius: the weighted mean distance to the axis; point: the foot of the
         points' weighted centroid on the axis), then the cone whose radius is linear in the
         height along the axis (weighted least squares) when its half angle lies in
-        [CONE_MIN_ANGLE, CONE_MAX_ANGLE]; ``rms`` and ``max_dev`` over the points, ``area``
-        nan.
+        [CONE_MIN_ANGLE, CONE_MAX_ANGLE]; ``rms``, ``max_dev`` and ``outward`` as
+        :func:`~igl_heatseg.surfaces.primitives.fitted_surface` gives them (a surface whose
+        statistics are not finite is left out).
 
     Examples
     --------
@@ -152,14 +148,15 @@ def coaxial_surfaces(P, N, w, point, axis) -> list:
     h = Q @ axis
     d = np.linalg.norm(Q - np.outer(h, axis), axis=1)
     foot = point + float(w @ h) * axis  # the model's convention: the foot of the centroid
-    out = [_finish("cylinder", {"point": foot, "axis": axis, "radius": float(w @ d)}, P, N, w)]
+    out = [fitted_surface("cylinder", {"point": foot, "axis": axis, "radius": float(w @ d)},
+                          P, N, w, area)]
     sw = np.sqrt(w)
     (c0, c1), *_ = np.linalg.lstsq(np.c_[sw, sw * h], sw * d, rcond=None)
     if math.tan(CONE_MIN_ANGLE) <= abs(c1) <= math.tan(CONE_MAX_ANGLE):
         apex = point - (c0 / c1) * axis  # where the radius c0 + c1 h is zero
-        out.append(_finish("cone", {"apex": apex, "axis": np.sign(c1) * axis,
-                                    "half_angle": math.atan(abs(c1))}, P, N, w))
-    return out
+        out.append(fitted_surface("cone", {"apex": apex, "axis": np.sign(c1) * axis,
+                                           "half_angle": math.atan(abs(c1))}, P, N, w, area))
+    return [s for s in out if s is not None]
 
 
 def _bic(rms: float, n: int, k: int, floor: float) -> float:
@@ -234,13 +231,12 @@ def snap_to_axes(V, F, labels, surfaces, tol: float, W=None, FN=None) -> tuple[l
         best, best_rms = None, math.sqrt(float(w @ (d * d)))
         best_bic = _bic(best_rms, len(P), 3, floor)
         for point, axis in axes:
-            for c in coaxial_surfaces(P, N, w, point, axis):
+            for c in coaxial_surfaces(P, N, w, point, axis, area):
                 b = _bic(c.rms, len(P), 1 if c.kind == "cylinder" else 2, floor)
                 if c.rms < best_rms and c.rms <= tol and b < best_bic and \
                         normals_agree(V, F, FN, faces, c):
                     best, best_rms, best_bic = c, c.rms, b
         if best is not None:
-            surfaces[k] = Surface(best.kind, best.params, rms=best.rms, max_dev=best.max_dev,
-                                  area=area, outward=best.outward)
+            surfaces[k] = best
             n += 1
     return surfaces, n

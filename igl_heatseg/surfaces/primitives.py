@@ -45,7 +45,8 @@ from .lm import (
 )
 from .model import Surface
 
-__all__ = ["fit_plane", "fit_sphere", "fit_cylinder", "fit_cone", "fit_torus"]
+__all__ = ["fit_plane", "fit_sphere", "fit_cylinder", "fit_cone", "fit_torus",
+           "fitted_surface"]
 
 #: A radius (or apex distance) beyond this many data spreads (RMS distance of the points to their
 #: centroid) is indistinguishable from the simpler kind: the sagitta over the data is below
@@ -85,8 +86,40 @@ def _chart(a0, u0, v0, s, t):
     return _unit(a0 + s * u0 + t * v0)
 
 
-def _finish(kind, params, P, N, w, area) -> Surface:
-    """A Surface with weighted rms, max_dev and outward from the normals."""
+def fitted_surface(kind, params, P, N, w, area) -> Surface | None:
+    """The Surface of ``kind`` and ``params`` with its fit statistics over weighted samples.
+
+    Parameters
+    ----------
+    kind : str
+        An analytic kind.
+    params : dict
+        Its parameters (:mod:`igl_heatseg.surfaces.model`).
+    P : (p, 3) float64
+        Points.
+    N : (p, 3) float64 or None
+        Unit normals at the points (for ``outward``, a weighted vote on an evenly strided
+        subsample); ``None``, or a plane: outward.
+    w : (p,) float64
+        Non-negative weights summing to 1.
+    area : float
+        The ``area`` to record.
+
+    Returns
+    -------
+    Surface or None
+        ``rms`` (weighted), ``max_dev`` (over the points of positive weight), ``outward``;
+        None when either statistic is not finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[1.0, 0, 0], [0, 3, 0]]); N = np.array([[1.0, 0, 0], [0, 1, 0]])
+    >>> s = fitted_surface("sphere", {"center": np.zeros(3), "radius": 2.0}, P, N,
+    ...                    np.array([0.5, 0.5]), 1.0)
+    >>> s.rms, s.max_dev, s.outward
+    (1.0, 1.0, True)
+    """
     s = Surface(kind, params)
     d = s.distance(P)
     rms = math.sqrt(float(w @ (d * d)))
@@ -192,7 +225,7 @@ def fit_plane(P, N=None, w=None) -> Surface | None:
         n = n if wn @ (N @ n) >= 0 else -n
     else:
         n = n if n[int(np.argmax(np.abs(n)))] > 0 else -n
-    return _finish("plane", {"point": m, "normal": n}, P, N, wn, weights_area(w))
+    return fitted_surface("plane", {"point": m, "normal": n}, P, N, wn, weights_area(w))
 
 
 def _algebraic_sphere(X, wn):
@@ -266,7 +299,7 @@ def fit_sphere(P, N=None, w=None, *, give_up_rms: float | None = None) -> Surfac
     n = _chart(n0, *_frame(n0), t[0], t[1])
     center = m + sc * (t[2] * n - n / t[3])
     params = {"center": center, "radius": float(sc / abs(t[3]))}
-    return _finish("sphere", params, P, N, wn, weights_area(w))
+    return fitted_surface("sphere", params, P, N, wn, weights_area(w))
 
 
 def _sphere_res(n0):
@@ -362,7 +395,7 @@ def fit_cylinder(P, N, w=None, *, give_up_rms: float | None = None) -> Surface |
     a, _, _, n, _ = geometry(t)
     foot = _perp((t[3] - 1.0 / t[4]) * n[None], a)[0]
     params = {"point": m + sc * foot, "axis": a, "radius": float(sc / abs(t[4]))}
-    return _finish("cylinder", params, P, N, wn, weights_area(w))
+    return fitted_surface("cylinder", params, P, N, wn, weights_area(w))
 
 
 def _cylinder_res(a0, n0):
@@ -495,7 +528,7 @@ def fit_cone(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | Non
         a, psi = -a, -psi
     apex = c - (r0 / math.tan(psi)) * a
     params = {"apex": m + sc * apex, "axis": a, "half_angle": float(psi)}
-    return _finish("cone", params, P, N, wn, weights_area(w))
+    return fitted_surface("cone", params, P, N, wn, weights_area(w))
 
 
 def _cone_res(a0):
@@ -605,7 +638,7 @@ def fit_torus(P, N, w=None, *, give_up_rms: float | None = None) -> Surface | No
         return None
     params = {"center": m + sc * center, "axis": a, "major_radius": sc * R,
               "minor_radius": sc * r}
-    return _finish("torus", params, P, N, wn, weights_area(w))
+    return fitted_surface("torus", params, P, N, wn, weights_area(w))
 
 
 def _torus_seed(X, N, wn, a0, q):

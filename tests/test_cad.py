@@ -329,6 +329,38 @@ def test_failed_build_writes_the_faceted_model(monkeypatch, tmp_path):
     assert len(faces_of(read_step(write_step(res.shape, tmp_path / "f.step")))) == len(F)
 
 
+def test_one_segment_failing_to_fit_facets_only_that_segment(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    real = build_mod._surface_for
+
+    def fail_on_two(a, *args, **kwargs):
+        if a == 2:
+            raise RuntimeError("igl::lscm failed")
+        return real(a, *args, **kwargs)
+
+    monkeypatch.setattr(build_mod, "_surface_for", fail_on_two)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert not res.faceted_model
+    assert [f["status"] for f in res.faces] == ["built"] * 2 + ["faceted"] + ["built"] * 3
+    assert "lscm failed" in res.faces[2]["reason"]
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
+def test_disk_chart_refuses_two_fans_sharing_a_vertex():
+    from igl_heatseg.cad.freeform import disk_chart
+
+    # Euler characteristic 1, but two boundary loops through vertex 2 (libigl's LSCM raises)
+    V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [0, 1, 0], [1, -1, 0],
+                  [3, 1, 0]], dtype=float)
+    F = np.array([[4, 1, 0], [1, 5, 0], [2, 5, 1], [3, 6, 2]])
+    assert disk_chart(V, F) is None
+    used, Fd = np.unique(F[:3], return_inverse=True)  # the first fan alone is a disk
+    UV = disk_chart(V[used], Fd.reshape(-1, 3))
+    assert UV is not None and UV.shape == (5, 2)
+
+
 def test_invalid_segments_names_the_segment_of_an_invalid_face():
     from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace

@@ -733,7 +733,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     for a, s in enumerate(surfaces):
         progress("surfaces", a / k)
         if a not in cache:
-            cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+            try:
+                cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+            except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
+                # one segment's fit failing facets that segment, not the whole model
+                cache[a] = None, None, math.nan, f"surface not built: {exc}"
         g, p, d, r = cache[a]
         if a in skip and r is None:
             g, p, r = None, None, skip[a]

@@ -76,18 +76,26 @@ def disk_chart(V: np.ndarray, F: np.ndarray):
         Counter-clockwise (positive triangle areas) when the mesh normals are seen from above.
     """
     nv = len(np.unique(F))
-    edges = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1), axis=0)
+    edges, uses = np.unique(np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1),
+                            axis=0, return_counts=True)
     if nv - len(edges) + len(F) != 1 or nv != len(V):
         return None
     bnd = igl.boundary_loop(F)
-    if len(bnd) < 3:
-        return None
+    if len(bnd) < 3 or len(bnd) != np.count_nonzero(uses == 1):
+        return None  # more than one boundary loop: two fans on one vertex, say
     far = bnd[int(np.argmax(np.linalg.norm(V[bnd] - V[bnd[0]], axis=1)))]
     scale = float(np.linalg.norm(V[far] - V[bnd[0]]))
-    UV, _ = igl.lscm(V, F, np.array([bnd[0], far]), np.array([[0.0, 0.0], [scale, 0.0]]))
-    UV = orient_chart(_align(UV), F)
-    if UV is None:  # LSCM folded: Tutte-like harmonic map onto the disk is bijective
-        UV = orient_chart(igl.harmonic(V, F, bnd, igl.map_vertices_to_circle(V, bnd), 1), F)
+    try:
+        UV, _ = igl.lscm(V, F, np.array([bnd[0], far]), np.array([[0.0, 0.0], [scale, 0.0]]))
+        UV = orient_chart(_align(UV), F)
+    except RuntimeError:  # libigl's solve failed (e.g. a fan of a few triangles)
+        UV = None
+    if UV is None:  # LSCM folded or failed: a Tutte-like map onto the disk is bijective
+        try:
+            circle = igl.map_vertices_to_circle(V, bnd)
+            UV = orient_chart(igl.harmonic(V, F, bnd, circle, 1), F)
+        except RuntimeError:
+            return None
     return UV
 
 

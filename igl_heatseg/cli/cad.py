@@ -89,7 +89,8 @@ def register(subparsers) -> None:
         default=None,
         metavar="T",
         help="modelling tolerance in model units: a segment farther than this from its "
-        "surface is faceted (default 1 %% of the bounding-box diagonal)",
+        "surface is faceted (default 1 %% of the bounding-box diagonal; on a mesh noisier "
+        "than that, also twice its own fit tolerance, keeping the better model)",
     )
     add_repair_argument(p)
     p.add_argument(

@@ -382,6 +382,43 @@ def test_disk_chart_refuses_two_fans_sharing_a_vertex():
     assert UV is not None and UV.shape == (5, 2)
 
 
+def test_face_read_back_out_of_place_is_named_by_its_vertices():
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.gp import gp_Pnt
+    from OCP.TopAbs import TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS, TopoDS_Compound
+
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(2)
+    shape = build_brep(V, F, labels, box_planes()).shape
+    faces = faces_of(shape)
+    assert build_mod._stray_faces(shape, shape) == []
+
+    def corners(face):
+        ex, out = TopExp_Explorer(face, TopAbs_VERTEX), []
+        while ex.More():
+            p = BRep_Tool.Pnt_s(TopoDS.Vertex(ex.Current()))
+            out.append((p.X(), p.Y(), p.Z()))
+            ex.Next()
+        return list(dict.fromkeys(out))
+
+    top = next(f for f in faces if all(abs(c[2] - 1) < 1e-9 for c in corners(f)))
+    a, b, c = corners(top)[:3]
+    # what the STEP reader made of a sewn triangle: the top's corners and a point far away
+    poly = BRepBuilderAPI_MakePolygon(gp_Pnt(*a), gp_Pnt(*b), gp_Pnt(*c), gp_Pnt(9.0, 9.0, 1.0),
+                                      True)
+    stray = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+    back, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(back)
+    for f in [f for f in faces if not f.IsSame(top)] + [stray]:
+        builder.Add(back, f)
+    out = build_mod._stray_faces(shape, back)
+    assert len(out) == 1 and out[0].IsSame(top)
+
+
 def test_invalid_segments_names_the_segment_of_an_invalid_face():
     from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace

@@ -31,7 +31,9 @@ from ._ocp import require_ocp
 
 require_ocp()
 
+from OCP.Bnd import Bnd_Box  # noqa: E402
 from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
+from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
@@ -40,8 +42,8 @@ from OCP.collections import (  # noqa: E402
 )
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
-from OCP.TopExp import TopExp  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX  # noqa: E402
+from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
@@ -96,6 +98,10 @@ SEW_MAX_EDGE = 0.5
 #: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
 #: (when that does not give a valid solid, the first open shell is written).
 MAX_REBUILDS = 2
+
+#: A face read back from STEP reaching this fraction of the model's diagonal out of its box is
+#: wrong (sewing tolerances are at most half a mesh edge).
+STRAY_BOX_REL = 0.05
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -690,12 +696,59 @@ def _invalid_faces(shape) -> list | None:
     with tempfile.TemporaryDirectory() as tmp:
         back = read_step(write_step(shape, Path(tmp) / "check.step"))
     if BRepCheck_Analyzer(back).IsValid():
-        return []
+        return _stray_faces(shape, back)
     mine, theirs = faces_of(shape), faces_of(back)
     if len(mine) != len(theirs):  # (the reader keeps the faces in order)
         return None
     return [f for f, g in zip(mine, theirs, strict=True)
             if not BRepCheck_Analyzer(g).IsValid()] or None
+
+
+def _box(shape) -> np.ndarray:
+    b = Bnd_Box()
+    BRepBndLib.Add_s(shape, b)
+    lo, hi = b.CornerMin(), b.CornerMax()
+    return np.array([[lo.X(), lo.Y(), lo.Z()], [hi.X(), hi.Y(), hi.Z()]])
+
+
+def _vertex_keys(face, scale: float) -> set:
+    ex, out = TopExp_Explorer(face, TopAbs_VERTEX), set()
+    while ex.More():
+        p = BRep_Tool.Pnt_s(TopoDS.Vertex(ex.Current()))
+        out.add(tuple(np.round(np.array([p.X(), p.Y(), p.Z()]) / scale).astype(np.int64)))
+        ex.Next()
+    return out
+
+
+def _stray_faces(shape, back) -> list:
+    """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face
+    reaching out of the model's box by more than STRAY_BOX_REL of its diagonal, or with no
+    area (a sewn triangle whose edge was split at a neighbour's vertex came back as a 73 mm^2
+    face spanning 3x the part, which BRepCheck passed); each is named by the face of ``shape``
+    sharing most of its vertices. [] when every face came back in place."""
+    mine, theirs = faces_of(shape), faces_of(back)
+    box = _box(shape)
+    diag = float(np.linalg.norm(box[1] - box[0]))
+    slack = STRAY_BOX_REL * diag
+    bad = []
+    for g in theirs:
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(g, props)
+        b = _box(g)
+        if props.Mass() <= 0 or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
+            bad.append(g)
+    if not bad:
+        return []
+    scale = 1e-6 * diag
+    keys = [_vertex_keys(f, scale) for f in mine]
+    out = []
+    for g in bad:
+        kg = _vertex_keys(g, scale)
+        shared = [len(kg & k) for k in keys]
+        i = int(np.argmax(shared))
+        if shared[i] and not any(f.IsSame(mine[i]) for f in out):
+            out.append(mine[i])
+    return out
 
 
 def _invalid_segments(shape, faces, owner, status, neighbours=None):

@@ -25,7 +25,6 @@ import numpy as np
 from igl_heatseg.errors import MeshError
 from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
-from igl_heatseg.surfaces.tolerance import fit_tolerance
 
 from ._ocp import require_ocp
 
@@ -60,13 +59,6 @@ __all__ = ["CadResult", "build_brep"]
 #: vertices lie farther than this from its surface is not built (faceted instead).  Loose
 #: enough for scan noise, tight enough to reject a wrong surface type.
 DEFAULT_TOL_REL = 1e-2
-
-#: ... or this many times the mesh's own fit tolerance
-#: (:func:`igl_heatseg.surfaces.fit_tolerance`, from its noise and chord error), when larger:
-#: the largest vertex deviation of a right surface from a noisy segment is a few noise levels
-#: (coarse noisy scans have noise near 1 % of the diagonal).  2 passes 94 % of the pure,
-#: rightly typed segments of the noisy tuning parts, 82 % at 1 % of the diagonal alone.
-DEFAULT_TOL_NOISE = 2.0
 
 #: Edge curves (B-splines) approximate their points to this fraction of the tolerance, so
 #: curve error never dominates the fit error.
@@ -489,27 +481,21 @@ def _tolerances(V, F, surfaces, tol):
     E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
     mean_edge = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
     if tol is None:
-        base = DEFAULT_TOL_REL * diag
-        tol = max(base, DEFAULT_TOL_NOISE * fit_tolerance(V, F))
+        tol = DEFAULT_TOL_REL * diag
     elif not (np.isfinite(tol) and tol > 0):
         raise MeshError(f"tol must be a positive number, got {tol!r}")
-    else:
-        base = tol
-    tol, base = (max(float(x), MIN_TOL_REL * diag) for x in (tol, base))
-    # edges and sewing keep the geometric tolerance: a noisy mesh lets a surface stray farther
-    # from its vertices, not the faces from each other
-    curve_tol = max(CURVE_TOL_FRACTION * base, MIN_TOL_REL * diag)
-    return {"tol": tol, "base_tol": base, "curve_tol": curve_tol,
-            "vertex_tol": max(MIN_TOL_REL * diag, 1e-7), "diag": diag, "mean_edge": mean_edge}
+    tol = max(float(tol), MIN_TOL_REL * diag)
+    curve_tol = max(CURVE_TOL_FRACTION * tol, MIN_TOL_REL * diag)
+    return {"tol": tol, "curve_tol": curve_tol, "vertex_tol": max(MIN_TOL_REL * diag, 1e-7),
+            "diag": diag, "mean_edge": mean_edge}
 
 
 def _sew_tolerance(ctx, devs) -> float:
     """Sewing closes gaps between built faces (curve error) and faceted patches (whose
     borders are the mesh polylines snapped onto the good neighbour's surface): a few curve
-    tolerances or twice the deviation of the worst built surface (at most the geometric
-    tolerance, ``base_tol``), never above half an edge (raised later to cover the chords of
-    faceted borders, :data:`FACET_GAP_FACTOR`)."""
-    dev = min(max([d for d in devs if np.isfinite(d)], default=0.0), ctx["base_tol"])
+    tolerances or twice the deviation of the worst built surface, never above half an edge
+    (raised later to cover the chords of faceted borders, :data:`FACET_GAP_FACTOR`)."""
+    dev = max([d for d in devs if np.isfinite(d)], default=0.0)
     return float(min(max(4 * ctx["curve_tol"], 2.0 * dev), 0.5 * ctx["mean_edge"]))
 
 
@@ -545,10 +531,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         used for freeform segments (a disk segment without one gets a harmonic chart).
     tol : float, optional
         Modelling tolerance (model units): segments farther than this from their surface are
-        faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal; when
-        :data:`DEFAULT_TOL_NOISE` times the mesh's fit tolerance (its noise) is larger, the
-        model is built at both and the better kept (a valid closed solid, then fewer faceted
-        segments, then the smaller Hausdorff distance).
+        faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal.
     progress : callable, optional
         ``progress(stage, fraction)``.
 
@@ -585,32 +568,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     V, F, labels = _validate(V, F, labels, surfaces, uv)
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
-    res = _build_at(V, F, labels, surfaces, uv, ctx, progress)
-    if ctx["tol"] > ctx["base_tol"]:
-        # a noisy mesh: surfaces accepted farther from their vertices can fail to sew where
-        # the geometric tolerance facets them and closes; keep the better of the two models
-        logger.info("building again at the geometric tolerance %.3g (noise tolerance %.3g)",
-                    ctx["base_tol"], ctx["tol"])
-        other = _build_at(V, F, labels, surfaces, uv, dict(ctx, tol=ctx["base_tol"]), progress)
-        for k, v in res.timings.items():
-            other.timings[k] = other.timings.get(k, 0.0) + v
-        res.timings = dict(other.timings)
-        if _quality(other, F) > _quality(res, F):
-            res = other
-    return res
-
-
-def _quality(res: CadResult, F) -> tuple:
-    """Ordering of two builds of one mesh: a valid closed solid (of a closed mesh) first,
-    then fewer faceted segments, then the smaller Hausdorff distance."""
-    fid = res.fidelity
-    solid = bool(fid.get("valid")) and (fid.get("solids", 0) >= 1 or not _is_closed(F))
-    return (solid, -len(res.not_built), -float(fid.get("hausdorff", math.inf)))
-
-
-def _build_at(V, F, labels, surfaces, uv, ctx, progress) -> CadResult:
-    """One build of :func:`build_brep` at the tolerances of ``ctx`` (:func:`_tolerances`)."""
-    ctx = dict(ctx)
     ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
     closed = _is_closed(F)
     timings: dict = {}
@@ -676,7 +633,7 @@ def _build_at(V, F, labels, surfaces, uv, ctx, progress) -> CadResult:
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)
     timings["fidelity"] = time.perf_counter() - t
-    tols = {k: ctx[k] for k in ("tol", "base_tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
+    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
     return CadResult(shape, status, fid, timings, tols, faceted_model, message)

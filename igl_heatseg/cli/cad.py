@@ -89,8 +89,7 @@ def register(subparsers) -> None:
         default=None,
         metavar="T",
         help="modelling tolerance in model units: a segment farther than this from its "
-        "surface is faceted (default 1 %% of the bounding-box diagonal; on a mesh noisier "
-        "than that, also twice its own fit tolerance, keeping the better model)",
+        "surface is faceted (default 1 %% of the bounding-box diagonal)",
     )
     add_repair_argument(p)
     p.add_argument(

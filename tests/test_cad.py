@@ -132,6 +132,36 @@ def test_cube_six_planes_closed_solid():
     json.dumps(res.to_report())
 
 
+def test_solid_of_a_closed_shell_skips_shape_fix_when_valid_and_points_outward(monkeypatch):
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.BRepGProp import BRepGProp
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.GProp import GProp_GProps
+    from OCP.TopAbs import TopAbs_SHELL
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    import igl_heatseg.cad.sew as sew_mod
+
+    def volume(shape):
+        props = GProp_GProps()
+        BRepGProp.VolumeProperties_s(shape, props)
+        return props.Mass()
+
+    ex = TopExp_Explorer(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape(), TopAbs_SHELL)
+    shell = TopoDS.Shell(ex.Current())
+
+    class Broken:  # ShapeFix_Solid made an invalid solid of a valid 17k-face one
+        def __init__(self, solid):
+            raise AssertionError("ShapeFix_Solid called on a valid solid")
+
+    monkeypatch.setattr(sew_mod, "ShapeFix_Solid", Broken)
+    for sh in (shell, TopoDS.Shell(shell.Reversed())):
+        solid = sew_mod._solid(sh)
+        assert BRepCheck_Analyzer(solid).IsValid()
+        assert volume(solid) == pytest.approx(6.0, rel=1e-9)
+
+
 def test_capped_cylinder_three_faces_right_radius():
     R, H = 1.5, 2.0
     prof = polyline([(0, 0), (R, 0)], 3) + polyline([(R, 0), (R, H)], 4)[1:] \

@@ -612,7 +612,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                            sorted(bad))
             skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
         sew_tol = info["sew_tol"]
-        message = "" if info["solid"] or not closed else "closed mesh but the shell is open"
+        message = "" if info["solid"] or not closed else (
+            "closed mesh but the shell is open" if info["free_edges_after_sewing"] else
+            "closed mesh and shell, but no valid solid")
         for why, what in (("invalid after sewing (BRepCheck)", "failing BRepCheck"),
                           ("free edges after sewing", "leaving free edges")):
             n = sum(r == why for r in skip.values())

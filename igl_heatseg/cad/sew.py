@@ -75,9 +75,13 @@ def _solid(shell):
     mk = BRepBuilderAPI_MakeSolid(shell)
     if not mk.IsDone():
         return None
-    fix = ShapeFix_Solid(mk.Solid())
-    fix.Perform()
-    solid = fix.Solid()
+    solid = mk.Solid()
+    if not BRepCheck_Analyzer(solid).IsValid():
+        # ShapeFix_Solid only when needed: it made an invalid solid of a valid one whose
+        # shell has 17k faces (tuning bolt_s1007_irregular_n0.2)
+        fix = ShapeFix_Solid(solid)
+        fix.Perform()
+        solid = fix.Solid()
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(solid, props)
     if props.Mass() < 0:

@@ -132,7 +132,7 @@ def test_cube_six_planes_closed_solid():
     json.dumps(res.to_report())
 
 
-def test_solid_of_a_closed_shell_skips_shape_fix_when_valid_and_points_outward(monkeypatch):
+def test_solid_of_a_closed_shell_stays_valid_when_shape_fix_breaks_it(monkeypatch):
     from OCP.BRepCheck import BRepCheck_Analyzer
     from OCP.BRepGProp import BRepGProp
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
@@ -153,7 +153,23 @@ def test_solid_of_a_closed_shell_skips_shape_fix_when_valid_and_points_outward(m
 
     class Broken:  # ShapeFix_Solid made an invalid solid of a valid 17k-face one
         def __init__(self, solid):
-            raise AssertionError("ShapeFix_Solid called on a valid solid")
+            self.solid = solid
+
+        def Perform(self):
+            pass
+
+        def Solid(self):  # the box without its last face: an open, invalid solid
+            from OCP.BRep import BRep_Builder
+            from OCP.TopoDS import TopoDS_Shell, TopoDS_Solid
+
+            builder, shell, solid = BRep_Builder(), TopoDS_Shell(), TopoDS_Solid()
+            builder.MakeShell(shell)
+            for f in faces_of(self.solid)[:-1]:
+                builder.Add(shell, f)
+            builder.MakeSolid(solid)
+            builder.Add(solid, shell)
+            assert not BRepCheck_Analyzer(solid).IsValid()
+            return solid
 
     monkeypatch.setattr(sew_mod, "ShapeFix_Solid", Broken)
     for sh in (shell, TopoDS.Shell(shell.Reversed())):

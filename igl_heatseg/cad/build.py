@@ -91,9 +91,14 @@ SEW_MAX_EDGE = 0.5
 #: (when that does not give a valid solid, the first open shell is written).
 MAX_REBUILDS = 2
 
-#: A face read back from STEP reaching this fraction of the model's diagonal out of its box is
-#: wrong (sewing tolerances are at most half a mesh edge).
+#: A face read back from STEP reaching this fraction of the model's diagonal out of its box, or
+#: with more than STRAY_AREA_FACTOR times its area, is wrong (sewing tolerances are at most
+#: half a mesh edge).  Measured on tuning parts: a sewn triangle came back 118 times larger
+#: (bolt_s1018_coarse_n0, spanning 3x the part); two came back 1.8 and 1.9 times larger,
+#: overlapping a neighbour within the sewing tolerance (rounded_box_s1011_irregular_n0.05),
+#: where faceting their neighbours cascaded into a fully faceted model.
 STRAY_BOX_REL = 0.05
+STRAY_AREA_FACTOR = 10.0
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -679,34 +684,41 @@ def _vertex_keys(face, scale: float) -> set:
     return out
 
 
+def _area(face) -> float:
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    return float(props.Mass())
+
+
 def _stray_faces(shape, back) -> list:
-    """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face
-    reaching out of the model's box by more than STRAY_BOX_REL of its diagonal, or with no
-    area (a sewn triangle whose edge was split at a neighbour's vertex came back as a 73 mm^2
-    face spanning 3x the part, which BRepCheck passed); each is named by the face of ``shape``
-    sharing most of its vertices. [] when every face came back in place."""
+    """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face that
+    comes back with more than STRAY_AREA_FACTOR times the area of the face it came from (the
+    face of ``shape`` sharing most of its vertices), or reaching out of the model's box by
+    more than STRAY_BOX_REL of its diagonal.  A sewn triangle whose edge was split at a
+    neighbour's vertex came back as a 73 mm^2 face (from 0.6) whose tessellation spans 3x the
+    part, and BRepCheck passed it.  [] when every face came back in place."""
     mine, theirs = faces_of(shape), faces_of(back)
     box = _box(shape)
     diag = float(np.linalg.norm(box[1] - box[0]))
-    slack = STRAY_BOX_REL * diag
-    bad = []
+    slack, scale = STRAY_BOX_REL * diag, 1e-6 * diag
+    index: dict = {}
+    for i, f in enumerate(mine):
+        for key in _vertex_keys(f, scale):
+            index.setdefault(key, []).append(i)
+    out: list = []
     for g in theirs:
-        props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(g, props)
+        votes: dict = {}
+        for key in _vertex_keys(g, scale):
+            for i in index.get(key, ()):
+                votes[i] = votes.get(i, 0) + 1
+        if not votes:
+            continue
+        i = max(votes, key=votes.get)
         b = _box(g)
-        if props.Mass() <= 0 or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
-            bad.append(g)
-    if not bad:
-        return []
-    scale = 1e-6 * diag
-    keys = [_vertex_keys(f, scale) for f in mine]
-    out = []
-    for g in bad:
-        kg = _vertex_keys(g, scale)
-        shared = [len(kg & k) for k in keys]
-        i = int(np.argmax(shared))
-        if shared[i] and not any(f.IsSame(mine[i]) for f in out):
-            out.append(mine[i])
+        grown = _area(g) > STRAY_AREA_FACTOR * abs(_area(mine[i])) + scale * diag
+        if grown or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
+            if not any(f.IsSame(mine[i]) for f in out):
+                out.append(mine[i])
     return out
 
 

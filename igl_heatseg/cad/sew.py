@@ -75,13 +75,12 @@ def _solid(shell):
     mk = BRepBuilderAPI_MakeSolid(shell)
     if not mk.IsDone():
         return None
-    solid = mk.Solid()
-    if not BRepCheck_Analyzer(solid).IsValid():
-        # ShapeFix_Solid only when needed: it made an invalid solid of a valid one whose
-        # shell has 17k faces (tuning bolt_s1007_irregular_n0.2)
-        fix = ShapeFix_Solid(solid)
-        fix.Perform()
-        solid = fix.Solid()
+    raw = mk.Solid()
+    fix = ShapeFix_Solid(raw)
+    fix.Perform()
+    solid = fix.Solid()
+    if not BRepCheck_Analyzer(solid).IsValid() and BRepCheck_Analyzer(raw).IsValid():
+        solid = raw  # the fix made an invalid solid of a valid one (a 17k-face shell)
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(solid, props)
     if props.Mass() < 0:

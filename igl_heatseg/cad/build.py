@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import logging
 import math
-import tempfile
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -30,9 +28,7 @@ from ._ocp import require_ocp
 
 require_ocp()
 
-from OCP.Bnd import Bnd_Box  # noqa: E402
 from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
-from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
@@ -41,14 +37,14 @@ from OCP.collections import (  # noqa: E402
 )
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX  # noqa: E402
-from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
+from OCP.TopExp import TopExp  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
-from .fidelity import brep_fidelity, faces_of  # noqa: E402
+from .fidelity import brep_fidelity  # noqa: E402
+from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .sew import assemble  # noqa: E402
-from .step import read_step, write_step  # noqa: E402
 from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -90,15 +86,6 @@ SEW_MAX_EDGE = 0.5
 #: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
 #: (when that does not give a valid solid, the first open shell is written).
 MAX_REBUILDS = 2
-
-#: A face read back from STEP reaching this fraction of the model's diagonal out of its box, or
-#: with more than STRAY_AREA_FACTOR times its area, is wrong (sewing tolerances are at most
-#: half a mesh edge).  Measured on tuning parts: a sewn triangle came back 118 times larger
-#: (bolt_s1018_coarse_n0, spanning 3x the part); two came back 1.8 and 1.9 times larger,
-#: overlapping a neighbour within the sewing tolerance (rounded_box_s1011_irregular_n0.05),
-#: where faceting their neighbours cascaded into a fully faceted model.
-STRAY_BOX_REL = 0.05
-STRAY_AREA_FACTOR = 10.0
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -648,78 +635,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
 
 class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
-
-
-def _invalid_faces(shape) -> list | None:
-    """The faces of ``shape`` that fail BRepCheck in memory or, when it passes there, once
-    written to STEP and read back (what a reader of ``model.step`` gets: a sewn torus passed in
-    memory and failed after the round trip); [] when valid both ways, None when invalid with
-    no face to blame."""
-    if not BRepCheck_Analyzer(shape).IsValid():
-        return [f for f in faces_of(shape) if not BRepCheck_Analyzer(f).IsValid()] or None
-    with tempfile.TemporaryDirectory() as tmp:
-        back = read_step(write_step(shape, Path(tmp) / "check.step"))
-    if BRepCheck_Analyzer(back).IsValid():
-        return _stray_faces(shape, back)
-    mine, theirs = faces_of(shape), faces_of(back)
-    if len(mine) != len(theirs):  # (the reader keeps the faces in order)
-        return None
-    return [f for f, g in zip(mine, theirs, strict=True)
-            if not BRepCheck_Analyzer(g).IsValid()] or None
-
-
-def _box(shape) -> np.ndarray:
-    b = Bnd_Box()
-    BRepBndLib.Add_s(shape, b)
-    lo, hi = b.CornerMin(), b.CornerMax()
-    return np.array([[lo.X(), lo.Y(), lo.Z()], [hi.X(), hi.Y(), hi.Z()]])
-
-
-def _vertex_keys(face, scale: float) -> set:
-    ex, out = TopExp_Explorer(face, TopAbs_VERTEX), set()
-    while ex.More():
-        p = BRep_Tool.Pnt_s(TopoDS.Vertex(ex.Current()))
-        out.add(tuple(np.round(np.array([p.X(), p.Y(), p.Z()]) / scale).astype(np.int64)))
-        ex.Next()
-    return out
-
-
-def _area(face) -> float:
-    props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(face, props)
-    return float(props.Mass())
-
-
-def _stray_faces(shape, back) -> list:
-    """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face that
-    comes back with more than STRAY_AREA_FACTOR times the area of the face it came from (the
-    face of ``shape`` sharing most of its vertices), or reaching out of the model's box by
-    more than STRAY_BOX_REL of its diagonal.  A sewn triangle whose edge was split at a
-    neighbour's vertex came back as a 73 mm^2 face (from 0.6) whose tessellation spans 3x the
-    part, and BRepCheck passed it.  [] when every face came back in place."""
-    mine, theirs = faces_of(shape), faces_of(back)
-    box = _box(shape)
-    diag = float(np.linalg.norm(box[1] - box[0]))
-    slack, scale = STRAY_BOX_REL * diag, 1e-6 * diag
-    index: dict = {}
-    for i, f in enumerate(mine):
-        for key in _vertex_keys(f, scale):
-            index.setdefault(key, []).append(i)
-    out: list = []
-    for g in theirs:
-        votes: dict = {}
-        for key in _vertex_keys(g, scale):
-            for i in index.get(key, ()):
-                votes[i] = votes.get(i, 0) + 1
-        if not votes:
-            continue
-        i = max(votes, key=votes.get)
-        b = _box(g)
-        grown = _area(g) > STRAY_AREA_FACTOR * abs(_area(mine[i])) + scale * diag
-        if grown or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
-            if not any(f.IsSame(mine[i]) for f in out):
-                out.append(mine[i])
-    return out
 
 
 def _invalid_segments(shape, faces, owner, status, neighbours=None):

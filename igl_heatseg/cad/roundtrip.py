@@ -71,10 +71,15 @@ def invalid_faces(shape) -> list | None:
         back = read_step(write_step(shape, Path(tmp) / "check.step"))
     if BRepCheck_Analyzer(back).IsValid():
         return _stray_faces(shape, back)
-    # the reader may split a face (so not the order): each named by its shared vertices
-    mine = faces_of(shape)
-    bad = [g for g in faces_of(back) if not BRepCheck_Analyzer(g).IsValid()]
-    return _dedupe([mine[i] for i in _origins(mine, bad, shape) if i is not None]) or None
+    # the reader may split a face (so not the order): each named by its shared vertices, or
+    # by its place when it shares none and no face was split (a face without vertices)
+    mine, theirs = faces_of(shape), faces_of(back)
+    bad = [j for j, g in enumerate(theirs) if not BRepCheck_Analyzer(g).IsValid()]
+    origin = _origins(mine, [theirs[j] for j in bad], shape)
+    same = len(mine) == len(theirs)
+    named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,
+                                                                          strict=True)]
+    return _dedupe([mine[i] for i in named if i is not None]) or None
 
 
 def _dedupe(faces: list) -> list:

@@ -717,8 +717,9 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
         if a not in cache:
             try:
                 cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
-            except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
+            except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
+                logger.warning("segment %d: surface not built (%s)", a, exc)
                 cache[a] = None, None, math.nan, f"surface not built: {exc}"
         g, p, d, r = cache[a]
         if a in skip and r is None:

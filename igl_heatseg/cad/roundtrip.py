@@ -75,7 +75,7 @@ def invalid_faces(shape) -> list | None:
     # by its place when it shares none and no face was split (a face without vertices)
     mine, theirs = faces_of(shape), faces_of(back)
     bad = [j for j, g in enumerate(theirs) if not BRepCheck_Analyzer(g).IsValid()]
-    origin = _origins(mine, [theirs[j] for j in bad], shape)
+    origin = _origins(mine, [theirs[j] for j in bad], _diagonal(_box(shape)))
     same = len(mine) == len(theirs)
     named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,
                                                                           strict=True)]
@@ -90,10 +90,11 @@ def _dedupe(faces: list) -> list:
     return out
 
 
-def _origins(mine: list, theirs: list, shape) -> list:
+def _origins(mine: list, theirs: list, diag: float) -> list:
     """For each face of ``theirs`` (read back from STEP), the index of the face of ``mine``
-    (the faces of ``shape``) sharing most of its vertices, or None when it shares none."""
-    scale = 1e-6 * float(np.linalg.norm(np.diff(_box(shape), axis=0)))
+    sharing most of its vertices (compared to 1e-6 of the model's diagonal ``diag``), or None
+    when it shares none."""
+    scale = 1e-6 * diag
     index: dict = {}
     for i, f in enumerate(mine):
         for key in _vertex_keys(f, scale):
@@ -106,6 +107,10 @@ def _origins(mine: list, theirs: list, shape) -> list:
                 votes[i] = votes.get(i, 0) + 1
         out.append(max(votes, key=votes.get) if votes else None)
     return out
+
+
+def _diagonal(box: np.ndarray) -> float:
+    return float(np.linalg.norm(box[1] - box[0]))
 
 
 def _box(shape) -> np.ndarray:
@@ -139,14 +144,17 @@ def _stray_faces(shape, back) -> list:
     part, and BRepCheck passed it.  [] when every face came back in place."""
     mine, theirs = faces_of(shape), faces_of(back)
     box = _box(shape)
-    diag = float(np.linalg.norm(box[1] - box[0]))
+    diag = _diagonal(box)
     slack = STRAY_BOX_REL * diag
+    areas: dict = {}  # of the faces of ``mine`` read back, each computed once
     out = []
-    for g, i in zip(theirs, _origins(mine, theirs, shape), strict=True):
+    for g, i in zip(theirs, _origins(mine, theirs, diag), strict=True):
         if i is None:
             continue
+        if i not in areas:
+            areas[i] = abs(_area(mine[i]))
         b = _box(g)
-        grown = _area(g) > STRAY_AREA_FACTOR * abs(_area(mine[i])) + 1e-6 * diag ** 2
+        grown = _area(g) > STRAY_AREA_FACTOR * areas[i] + 1e-6 * diag ** 2
         if grown or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
             out.append(mine[i])
     return _dedupe(out)

@@ -312,19 +312,21 @@ def test_step_round_trip(tmp_path):
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
 
 
-def test_impossible_fit_is_faceted_and_reported(tmp_path):
+def test_plane_farther_than_the_tolerance_is_built_as_a_bspline_face(tmp_path):
     V, F, labels = box_mesh(3)
     surfs = box_planes()
     surfs[2] = Surface("plane", {"point": np.array([3.0, 0, 0]), "normal": np.array([1.0, 0, 0])})
     res = build_brep(V, F, labels, surfs)
-    bad = res.not_built
-    assert [f["index"] for f in bad] == [2] and "deviates" in bad[0]["reason"]
+    assert res.not_built == []
+    assert res.faces[2]["kind"] == "plane" and res.faces[2]["built_as"] == "bspline"
+    assert res.faces[2]["max_dev"] < 1e-6  # the B-spline's deviation, not the plane's 2
+    assert {f["built_as"] for i, f in enumerate(res.faces) if i != 2} == {"plane"}
     fid = res.fidelity
-    # the 18 faceted triangles are coplanar: UnifySameDomain merges them into one plane
-    assert fid["faces"] == 6 and fid["free_edges"] == 0 and fid["valid"] and fid["solids"] == 1
+    assert fid["faces"] == 6 and fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["faces_by_type"]["bspline"]["count"] == 1
     assert fid["volume"] == pytest.approx(8.0, rel=1e-6)
-    assert read_step(write_step(res.shape, tmp_path / "partial.step")) is not None
-    assert res.to_report()["not_built"] == [2]
+    assert fid["hausdorff_rel"] < 1e-6
+    assert len(faces_of(read_step(write_step(res.shape, tmp_path / "p.step")))) == 6
 
 
 def test_wrong_cylinder_gives_faceted_side_in_a_closed_solid(tmp_path):
@@ -337,6 +339,9 @@ def test_wrong_cylinder_gives_faceted_side_in_a_closed_solid(tmp_path):
              Surface("plane", {"point": H * Z, "normal": Z})]
     res = build_brep(V, F, labels, surfs)
     assert res.to_report()["not_built"] == [1]
+    # no chart for a B-spline either: the side is an annulus
+    assert res.faces[1]["reason"].startswith("surface deviates")
+    assert res.faces[1]["built_as"] is None
     fid = res.fidelity
     # 128 faceted triangles; coplanar ones (each column of the 32-gon prism) are unified
     assert fid["faces"] == 2 + 32
@@ -748,3 +753,44 @@ def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
     assert fid["faces_not_tessellated"] == 1
     # the top's mesh vertices are on the top face: exact distances, not the 1.0 to the sides
     assert fid["hausdorff_mesh_to_brep"] < 1e-9
+
+
+def _wrong_side_plane():
+    V, F, labels = box_mesh(3)
+    surfs = box_planes()
+    surfs[2] = Surface("plane", {"point": np.array([3.0, 0, 0]), "normal": np.array([1.0, 0, 0])})
+    return V, F, labels, surfs
+
+
+def test_model_broken_by_a_bspline_stand_in_is_built_again_without_it(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+    from OCP.GeomAbs import GeomAbs_SurfaceType
+
+    real = build_mod._invalid_segments
+
+    def bspline_breaks_it(shape, *args, **kwargs):
+        kinds = {BRepAdaptor_Surface(f).GetType() for f in faces_of(shape)}
+        if GeomAbs_SurfaceType.GeomAbs_BSplineSurface in kinds:
+            return None  # invalid, nobody to blame: the model would be written faceted
+        return real(shape, *args, **kwargs)
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", bspline_breaks_it)
+    V, F, labels, surfs = _wrong_side_plane()
+    res = build_brep(V, F, labels, surfs)
+    assert not res.faceted_model
+    assert [f["index"] for f in res.not_built] == [2]
+    assert res.faces[2]["reason"].startswith("surface deviates")
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
+def test_bspline_face_far_from_the_mesh_is_faceted(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    real = build_mod.face_points
+    monkeypatch.setattr(build_mod, "face_points",
+                        lambda face, d: np.vstack([real(face, d), [[0.0, 0.0, 5.0]]]))
+    V, F, labels, surfs = _wrong_side_plane()
+    res = build_brep(V, F, labels, surfs)
+    assert [f["index"] for f in res.not_built] == [2]
+    assert "from the mesh" in res.faces[2]["reason"]  # 4 from the cube's top: tol is 0.035
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1

@@ -18,6 +18,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
+import igl
 import numpy as np
 
 from igl_heatseg.errors import MeshError
@@ -28,21 +29,19 @@ from ._ocp import require_ocp
 
 require_ocp()
 
-from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
+from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
-from OCP.collections import (  # noqa: E402
-    IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as _AncestorMap,
-)
+from OCP.BRepTools import BRepTools  # noqa: E402
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
-from OCP.TopExp import TopExp  # noqa: E402
+from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
-from .fidelity import brep_fidelity  # noqa: E402
+from .blame import _blame, _open_segments, _surface_owners  # noqa: E402,F401
+from .fidelity import brep_fidelity, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
@@ -67,6 +66,11 @@ MIN_EDGE_SAMPLES = 24
 #: A trimmed face whose area differs from its segment's mesh area by more than this fraction
 #: was trimmed wrongly (complement chosen, loop lost) and is faceted instead.
 FACE_AREA_SLACK = 0.2
+
+#: A trimmed B-spline face reaching farther than this many tolerances from the mesh is not
+#: built: within the tolerance of its segment and of the surfaces of its neighbours, it runs
+#: on past its chart only through a wrong trim (seen: 5 units out of a coarse block's side).
+FREEFORM_OFF_MESH = 2.0
 
 #: Sewing tolerance over the largest gap between a faceted patch's border chords and the
 #: neighbouring face's edge curve (the sagitta of the chords plus margin).
@@ -102,7 +106,10 @@ class CadResult:
         A solid when the mesh was closed and the shell closed, else a shell or compound.
     faces : list of dict
         One per segment: ``index``, ``kind``, ``status`` (``"built"`` or ``"faceted"``),
-        ``reason`` (None when built), ``max_dev`` (largest vertex distance to the surface).
+        ``reason`` (None when built), ``built_as`` (the fitted ``kind``, or ``"bspline"``
+        for an analytic segment farther than the tolerance from its surface but within it of
+        a B-spline fitted over its chart; None when faceted), ``max_dev`` (largest vertex
+        distance to the surface built, else to the fitted one).
     fidelity : dict
         :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
     timings : dict
@@ -187,15 +194,24 @@ def _segment(V, F, faces):
     return verts, Fl.reshape(-1, 3)
 
 
-def _surface_for(a, s, V, F, faces, uv, tol):
-    """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable."""
+def _surface_for(a, s, V, F, faces, uv, tol, bspline=True):
+    """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable.
+    An analytic surface farther than ``tol`` from the segment is replaced, when ``bspline``,
+    by a B-spline fitted over the segment's chart (:func:`freeform.segment_chart`)."""
     verts, Fl = _segment(V, F, faces)
     if s.is_analytic:
         dev = float(np.abs(s.distance(V[verts])).max())
-        if dev > tol:
-            return None, None, dev, f"surface deviates {dev:.3g} from its segment (tol {tol:.3g})"
-        geom = geometry.occ_surface(s)
-        return geom, geometry.Projector(s, geom), dev, None
+        if dev <= tol:
+            geom = geometry.occ_surface(s)
+            return geom, geometry.Projector(s, geom), dev, None
+        why = f"surface deviates {dev:.3g} from its segment (tol {tol:.3g})"
+        UV = freeform.segment_chart(s, V[verts], Fl) if bspline else None
+        if UV is None:  # else a B-spline face rather than the faceted patch
+            return None, None, dev, why
+        geom, err = freeform.freeform_surface(V[verts], Fl, UV, tol)
+        if geom is None or err > tol:
+            return None, None, dev, f"{why}; B-spline fit error {err:.3g}"
+        return geom, geometry.Projector(None, geom), err, None
     UV = None
     if uv is not None and uv[a] is not None:
         ids, UVg = (np.asarray(x) for x in uv[a])
@@ -460,6 +476,12 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         if fixed.ShapeType() != TopAbs_FACE or not BRepCheck_Analyzer(fixed).IsValid():
             return None, "trimmed face is not valid (BRepCheck)"
         face = TopoDS.Face(fixed)
+    if ctx["surfaces"][a].kind == "freeform":  # a B-spline runs on past its chart
+        off = float(np.sqrt(igl.point_mesh_squared_distance(
+            face_points(face, ctx["tol"]), *ctx["mesh"])[0].max(initial=0.0)))
+        BRepTools.Clean_s(face)
+        if off > FREEFORM_OFF_MESH * ctx["tol"]:
+            return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(face, props)
     area = props.Mass()
@@ -560,9 +582,35 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     V, F, labels = _validate(V, F, labels, surfaces, uv)
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
-    ctx["builder"], ctx["vtols"], ctx["surfaces"] = BRep_Builder(), {}, surfaces
+    ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
+    ctx["mesh"] = V, F
     closed = _is_closed(F)
     timings: dict = {}
+    ctx["bspline"], ctx["fallbacks"] = True, set()
+    shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
+        V, F, labels, surfaces, uv, ctx, closed, timings, progress)
+    if ctx["fallbacks"] and (faceted_model or (closed and not solid)):
+        # the B-spline stand-ins may be what broke it: the model without them, if better
+        logger.warning("the model with B-spline stand-ins for segments %s is %s; building "
+                       "it without them", sorted(ctx["fallbacks"]),
+                       "faceted" if faceted_model else "not a solid")
+        ctx["bspline"] = False
+        again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
+        if (not again[3], again[5]) > (not faceted_model, solid):
+            shape, status, sew_tol, faceted_model, message, solid = again
+    t = time.perf_counter()
+    progress("fidelity", 0.0)
+    fid = brep_fidelity(shape, V, F)
+    timings["fidelity"] = time.perf_counter() - t
+    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
+    tols["sew_tol"] = sew_tol
+    progress("fidelity", 1.0)
+    return CadResult(shape, status, fid, timings, tols, faceted_model, message)
+
+
+def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
+    """Faces built, sewn and checked, with the rebuilds of :func:`build_brep`: (shape, status,
+    sewing tolerance, fully faceted?, message, solid?)."""
     skip: dict = {}  # segments faceted after sewing: failed BRepCheck, or along free edges
     cache: dict = {}
     neighbours = segment_neighbours(F, labels, len(surfaces))
@@ -613,7 +661,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             if n:
                 message = (message + "; " if message else "") + (
                     f"{n} face(s) faceted after {what} in the sewn shell")
-        faceted_model = False
+        faceted_model, solid = False, info["solid"]
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
         if isinstance(exc, _InvalidBRep):
             logger.warning("%s; writing the faceted model", exc)
@@ -621,16 +669,10 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             logger.exception("B-Rep build failed; writing the faceted model")
         shape = _faceted_result(V, F, ctx, closed, timings, str(exc))
         status = [dict(index=a, kind=s.kind, status="faceted", reason=f"build failed: {exc}",
-                       max_dev=None) for a, s in enumerate(surfaces)]
+                       built_as=None, max_dev=None) for a, s in enumerate(surfaces)]
         sew_tol, faceted_model, message = None, True, f"build failed ({exc}); faceted model"
-    t = time.perf_counter()
-    progress("fidelity", 0.0)
-    fid = brep_fidelity(shape, V, F)
-    timings["fidelity"] = time.perf_counter() - t
-    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
-    tols["sew_tol"] = sew_tol
-    progress("fidelity", 1.0)
-    return CadResult(shape, status, fid, timings, tols, faceted_model, message)
+        solid = False
+    return shape, status, sew_tol, faceted_model, message, solid
 
 
 class _InvalidBRep(RuntimeError):
@@ -657,48 +699,6 @@ def _invalid_segments(shape, faces, owner, status, neighbours=None):
     return bad or None
 
 
-def _surface_owners(faces, owner) -> dict:
-    """Surface -> segment of the built faces (sewing and fixing keep the surfaces; OCP gives
-    one Python object per surface, so the objects are the keys)."""
-    out: dict = {}
-    for f, a in zip(faces, owner, strict=True):
-        out.setdefault(BRep_Tool.Surface_s(f), a)
-    return out
-
-
-def _blame(f, owners, status, neighbours):
-    """Built segments accountable for a face of a sewn shape (``owners``:
-    :func:`_surface_owners`): its own segment when built, else (a triangle of a faceted
-    segment) the built segments next to it; None when no built segment accounts for it."""
-    a = owners.get(BRep_Tool.Surface_s(f))
-    if a is None:
-        return None
-    if status[a]["status"] == "built":
-        return {a}
-    near = {b for b in (neighbours or {}).get(a, ()) if status[b]["status"] == "built"}
-    return near or None
-
-
-def _open_segments(shape, faces, owner, status, neighbours) -> set:
-    """Built segments along the free edges of a sewn shape (edges of one face only, seams
-    and degenerate edges excluded), found as :func:`_blame` finds them; empty when none is
-    accountable."""
-    amap = _AncestorMap()
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
-    owners = _surface_owners(faces, owner)
-    out: set = set()
-    for i in range(1, amap.Extent() + 1):
-        ancestors = amap.FindFromIndex(i)
-        edge = TopoDS.Edge(amap.FindKey(i))
-        if ancestors.Extent() != 1 or BRep_Tool.Degenerated_s(edge):
-            continue
-        face = TopoDS.Face(ancestors.First())
-        if BRep_Tool.IsClosed_s(edge, face):  # a seam of a periodic face
-            continue
-        out |= _blame(face, owners, status, neighbours) or set()
-    return out
-
-
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):
     """Surfaces, vertices, edges and faces: (faces, per-segment status, sewing tolerance,
     the segment of each face). Segments in ``skip`` (index -> reason) are faceted; ``cache``
@@ -716,7 +716,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
         progress("surfaces", a / k)
         if a not in cache:
             try:
-                cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"])
+                cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
+                                    bspline=ctx.get("bspline", True))
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
                 logger.warning("segment %d: surface not built (%s)", a, exc)
@@ -726,7 +727,16 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             g, p, r = None, None, skip[a]
         geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
     timings["surfaces"] = time.perf_counter() - t
+    # an analytic segment built on a B-spline (its surface deviated) is freeform from here on
+    built_as = [("bspline" if p.surface is None else s.kind) if p is not None else None
+                for s, p in zip(surfaces, projs, strict=True)]
+    surfaces = ctx["surfaces"] = [
+        Surface("freeform", {"centroid": V[np.unique(F[seg_faces[a]])].mean(axis=0)},
+                outward=s.outward) if s.is_analytic and b == "bspline" else s
+        for a, (s, b) in enumerate(zip(ctx["fitted"], built_as, strict=True))]
     ctx["devs"] = devs
+    ctx["fallbacks"] = {a for a, b in enumerate(built_as) if b == "bspline" and
+                        ctx["fitted"][a].is_analytic}
     ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons, strict=True)
                                           if r is None])
     t = time.perf_counter()
@@ -764,8 +774,9 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             tri = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"])
             faces.extend(tri)
             owner.extend([a] * len(tri))
-        status.append(dict(index=a, kind=surfaces[a].kind,
+        status.append(dict(index=a, kind=ctx["fitted"][a].kind,
                            status="built" if face is not None else "faceted", reason=reason,
+                           built_as=built_as[a] if face is not None else None,
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
     timings["faces"] = time.perf_counter() - t
     return faces, status, ctx["sew_tol"], owner

@@ -145,6 +145,37 @@ def mesh_faces(shape, deflection: float) -> float:
     return used
 
 
+def face_points(face, deflection: float) -> np.ndarray:
+    """Nodes of a face's triangulation at ``deflection`` (model units).
+
+    Parameters
+    ----------
+    face : TopoDS_Face
+    deflection : float
+        Linear deflection of the mesh (the face keeps the triangulation).
+
+    Returns
+    -------
+    (p, 3) float64
+        Empty when OCC cannot mesh the face.
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> face = faces_of(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())[0]
+    >>> P = face_points(face, 0.1)
+    >>> P.min(axis=0).tolist(), P.max(axis=0).tolist()
+    ([0.0, 0.0, 0.0], [0.0, 2.0, 3.0])
+    """
+    BRepMesh_IncrementalMesh(face, deflection, False, MESH_ANGLE, False)
+    tri, loc = _triangulation(face, deflection)
+    if tri is None:
+        return np.zeros((0, 3))
+    trsf = loc.Transformation()
+    return np.array([[p.X(), p.Y(), p.Z()] for p in
+                     (tri.Node(i).Transformed(trsf) for i in range(1, tri.NbNodes() + 1))])
+
+
 def tessellate(shape, deflection: float):
     """Triangles of a B-Rep (each face meshed by :func:`mesh_faces`).
 

@@ -32,7 +32,7 @@ from .geometry import DEG_MIN  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["disk_chart", "orient_chart", "freeform_surface"]
+__all__ = ["disk_chart", "segment_chart", "orient_chart", "freeform_surface"]
 
 #: Highest degree of a freeform patch: cubic; higher degrees let the approximation meet its
 #: tolerance at the grid points while oscillating between them (measured: errors of 3 units
@@ -97,6 +97,43 @@ def disk_chart(V: np.ndarray, F: np.ndarray):
         except RuntimeError:
             return None
     return UV
+
+
+def segment_chart(s, V: np.ndarray, F: np.ndarray):
+    """A chart of a segment whose analytic surface deviates from it, for a B-spline fit.
+
+    Parameters
+    ----------
+    s : Surface
+        The segment's fitted surface.
+    V : (p, 3) float64
+    F : (q, 3) int64
+        The segment, compact vertex indices.
+
+    Returns
+    -------
+    UV : (p, 2) float64 or None
+        For a plane, the points in the plane's frame (a chart with any number of holes);
+        otherwise :func:`disk_chart`. Counter-clockwise as in :func:`orient_chart`; None when
+        the projection folds or the segment is no disk.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> s = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0.0, 1.0])})
+    >>> V = np.array([[0.0, 0.0, 0.1], [1.0, 0.0, -0.1], [0.0, 1.0, 0.0]])
+    >>> UV = segment_chart(s, V, np.array([[0, 1, 2]]))
+    >>> bool(_signed_areas(UV, np.array([[0, 1, 2]]))[0] > 0), np.ptp(UV, axis=0).tolist()
+    (True, [1.0, 1.0])
+    """
+    if s.kind != "plane":
+        return disk_chart(V, F)
+    n = s.params["normal"]
+    e1 = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+    e1 /= np.linalg.norm(e1)
+    Q = V - s.params["point"]
+    return orient_chart(np.c_[Q @ e1, Q @ np.cross(n, e1)], F)
 
 
 def _align(UV: np.ndarray) -> np.ndarray:

@@ -764,7 +764,6 @@ def _wrong_side_plane():
 
 def test_model_broken_by_a_bspline_stand_in_is_built_again_without_it(monkeypatch):
     import igl_heatseg.cad.build as build_mod
-    from OCP.GeomAbs import GeomAbs_SurfaceType
 
     real = build_mod._invalid_segments
 

@@ -136,3 +136,17 @@ def test_brep_picture_helpers():
     assert np.allclose(brep_type_colors(["bspline"]), brep_type_colors(["freeform"]))
     E = face_border_edges(TF, tri_face)
     assert len(E) > 0 and E.max() < len(TV)
+
+
+def test_summary_counts_faceted_segments_and_bspline_stand_ins():
+    from igl_heatseg.cli.cad import cad_summary
+
+    cad = {"segments": 3, "not_built": [2],
+           "faces": [{"kind": "plane", "built_as": "bspline"},
+                     {"kind": "freeform", "built_as": "bspline"},
+                     {"kind": "cylinder", "built_as": None}],
+           "fidelity": {"valid": True, "solids": 1, "faces": 9, "free_edges": 0,
+                        "hausdorff_rel": 0.004, "volume_rel_error": 0.001}}
+    assert cad_summary(cad) == (
+        "B-Rep: valid solid, 9 faces from 3 segments (1 faceted, 1 analytic as B-splines), "
+        "0 free edges, Hausdorff 0.40 % of the diagonal, volume error 0.10 %")

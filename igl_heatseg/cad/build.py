@@ -1,7 +1,8 @@
 """From a segmented mesh with one fitted surface per segment to a sewn B-Rep.
 
 Stages (timed in :attr:`CadResult.timings`): ``topology`` (chains, loops, corners from the
-labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation check),
+labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation check, a
+B-spline over the chart of an analytic segment that deviates),
 ``vertices`` and ``edges`` (Gauss-Newton onto the adjacent surfaces, exact lines and circles
 or B-spline curves -- the chain's polyline where a spline would ring off it -- each edge
 built once and shared by its two faces; two corners of one chain never share a point),
@@ -544,8 +545,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         Per segment, ``None`` or a bijective chart: vertex ids ``(p,)`` and ``UV (p, 2)``;
         used for freeform segments (a disk segment without one gets a harmonic chart).
     tol : float, optional
-        Modelling tolerance (model units): segments farther than this from their surface are
-        faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal.
+        Modelling tolerance (model units): a segment farther than this from its analytic
+        surface gets a B-spline face within it over its chart (``built_as="bspline"``), else
+        is faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal.
     progress : callable, optional
         ``progress(stage, fraction)``.
 

@@ -26,9 +26,12 @@ def cad_summary(cad: dict) -> str:
     valid = "valid" if fid.get("valid") else "INVALID"
     vol = fid.get("volume_rel_error")
     vol_txt = f", volume error {100 * vol:.2f} %" if vol is not None else ""
+    stand_ins = sum(f.get("built_as") == "bspline" and f.get("kind") != "freeform"
+                    for f in cad.get("faces", []))
     return (
         f"B-Rep: {valid} {kind}, {fid.get('faces')} faces from {cad.get('segments')} segments "
-        f"({len(cad.get('not_built', []))} faceted), {fid.get('free_edges')} free edges, "
+        f"({len(cad.get('not_built', []))} faceted, {stand_ins} analytic as B-splines), "
+        f"{fid.get('free_edges')} free edges, "
         f"Hausdorff {100 * fid.get('hausdorff_rel', float('nan')):.2f} % of the diagonal"
         f"{vol_txt}"
     )
@@ -89,7 +92,8 @@ def register(subparsers) -> None:
         default=None,
         metavar="T",
         help="modelling tolerance in model units: a segment farther than this from its "
-        "surface is faceted (default 1 %% of the bounding-box diagonal)",
+        "surface gets a B-spline face within it, else is faceted (default 1 %% of the "
+        "bounding-box diagonal)",
     )
     add_repair_argument(p)
     p.add_argument(

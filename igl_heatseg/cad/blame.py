@@ -15,22 +15,68 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
 from OCP.TopExp import TopExp  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-__all__: list = []
+__all__ = ["surface_owners", "blame", "open_segments"]
 
 
-def _surface_owners(faces, owner) -> dict:
-    """Surface -> segment of the built faces (sewing and fixing keep the surfaces; OCP gives
-    one Python object per surface, so the objects are the keys)."""
+def surface_owners(faces, owner) -> dict:
+    """Surface -> segment of the faces built (sewing and fixing keep the surfaces; OCP gives
+    one Python object per surface, so the objects are the keys).
+
+    Parameters
+    ----------
+    faces : list of TopoDS_Face
+        The faces handed to the sewing.
+    owner : list of int
+        The segment of every face.
+
+    Returns
+    -------
+    dict of Geom_Surface -> int
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from igl_heatseg.cad.fidelity import faces_of
+    >>> faces = faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())
+    >>> sorted(surface_owners(faces, [0, 0, 1, 1, 2, 2]).values())
+    [0, 0, 1, 1, 2, 2]
+    """
     out: dict = {}
     for f, a in zip(faces, owner, strict=True):
         out.setdefault(BRep_Tool.Surface_s(f), a)
     return out
 
 
-def _blame(f, owners, status, neighbours):
-    """Built segments accountable for a face of a sewn shape (``owners``:
-    :func:`_surface_owners`): its own segment when built, else (a triangle of a faceted
-    segment) the built segments next to it; None when no built segment accounts for it."""
+def blame(f, owners, status, neighbours):
+    """Built segments accountable for a face of a sewn shape.
+
+    Parameters
+    ----------
+    f : TopoDS_Face
+        A face of the sewn shape.
+    owners : dict
+        :func:`surface_owners` of the faces sewn.
+    status : list of dict
+        Per segment, ``status`` is ``"built"`` or ``"faceted"``.
+    neighbours : dict of int -> set of int
+        Segments sharing an edge with each segment.
+
+    Returns
+    -------
+    set of int or None
+        Its own segment when built, else (a triangle of a faceted segment) the built segments
+        next to it; None when no built segment accounts for it.
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from igl_heatseg.cad.fidelity import faces_of
+    >>> faces = faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())
+    >>> owners = surface_owners(faces, [0, 1, 2, 2, 2, 2])
+    >>> status = [{"status": "built"}, {"status": "faceted"}, {"status": "built"}]
+    >>> blame(faces[0], owners, status, {}), blame(faces[1], owners, status, {1: {0, 2}})
+    ({0}, {0, 2})
+    """
     a = owners.get(BRep_Tool.Surface_s(f))
     if a is None:
         return None
@@ -40,13 +86,33 @@ def _blame(f, owners, status, neighbours):
     return near or None
 
 
-def _open_segments(shape, faces, owner, status, neighbours) -> set:
-    """Built segments along the free edges of a sewn shape (edges of one face only, seams
-    and degenerate edges excluded), found as :func:`_blame` finds them; empty when none is
-    accountable."""
+def open_segments(shape, faces, owner, status, neighbours) -> set:
+    """Built segments along the free edges of a sewn shape, found as :func:`blame` finds
+    them (edges of one face only; seams and degenerate edges are not free).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The sewn shape.
+    faces, owner, status, neighbours
+        As for :func:`surface_owners` and :func:`blame`.
+
+    Returns
+    -------
+    set of int
+        Empty when no built segment is accountable.
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from igl_heatseg.cad.fidelity import faces_of
+    >>> box = BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()
+    >>> open_segments(box, faces_of(box), [0] * 6, [{"status": "built"}], {})
+    set()
+    """
     amap = _AncestorMap()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
-    owners = _surface_owners(faces, owner)
+    owners = surface_owners(faces, owner)
     out: set = set()
     for i in range(1, amap.Extent() + 1):
         ancestors = amap.FindFromIndex(i)
@@ -56,5 +122,5 @@ def _open_segments(shape, faces, owner, status, neighbours) -> set:
         face = TopoDS.Face(ancestors.First())
         if BRep_Tool.IsClosed_s(edge, face):  # a seam of a periodic face
             continue
-        out |= _blame(face, owners, status, neighbours) or set()
+        out |= blame(face, owners, status, neighbours) or set()
     return out

@@ -41,7 +41,9 @@ from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, freeform, geometry, periodic  # noqa: E402
-from .blame import _blame, _open_segments, _surface_owners  # noqa: E402,F401
+from .blame import blame as _blame  # noqa: E402
+from .blame import open_segments as _open_segments  # noqa: E402
+from .blame import surface_owners as _surface_owners  # noqa: E402
 from .fidelity import brep_fidelity, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .sew import assemble  # noqa: E402

@@ -33,9 +33,7 @@ require_ocp()
 from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
-from OCP.BRepGProp import BRepGProp  # noqa: E402
 from OCP.BRepTools import BRepTools  # noqa: E402
-from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
 from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
@@ -44,7 +42,7 @@ from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .blame import blame as _blame  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
-from .fidelity import brep_fidelity, face_points  # noqa: E402
+from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
@@ -480,14 +478,15 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
             return None, "trimmed face is not valid (BRepCheck)"
         face = TopoDS.Face(fixed)
     if ctx["surfaces"][a].kind == "freeform":  # a B-spline runs on past its chart
-        off = float(np.sqrt(igl.point_mesh_squared_distance(
-            face_points(face, ctx["tol"]), *ctx["mesh"])[0].max(initial=0.0)))
+        if "mesh_tree" not in ctx:  # one tree for every B-spline face of every rebuild
+            ctx["mesh_tree"] = igl.AABB()
+            ctx["mesh_tree"].init(*ctx["mesh"])
+        off = float(np.sqrt(ctx["mesh_tree"].squared_distance(
+            *ctx["mesh"], face_points(face, ctx["tol"]))[0].max(initial=0.0)))
         BRepTools.Clean_s(face)
         if off > FREEFORM_OFF_MESH * ctx["tol"]:
             return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
-    props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(face, props)
-    area = props.Mass()
+    area = face_area(face)
     if not abs(area - seg_area) <= FACE_AREA_SLACK * seg_area:
         return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
     return face, None

@@ -30,8 +30,8 @@ from OCP.TopoDS import TopoDS  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "tessellate", "tessellate_by_type",
-           "face_type", "mesh_volume"]
+__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
+           "tessellate", "tessellate_by_type", "face_type", "mesh_volume"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -59,6 +59,20 @@ _TYPE_NAMES = {
     GeomAbs_SurfaceType.GeomAbs_BSplineSurface: "bspline",
     GeomAbs_SurfaceType.GeomAbs_BezierSurface: "bezier",
 }
+
+
+def face_area(face) -> float:
+    """Area of a face (model units squared; negative for a reversed face of some shapes).
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> round(face_area(faces_of(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())[0]), 9)
+    6.0
+    """
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    return float(props.Mass())
 
 
 def faces_of(shape) -> list:
@@ -279,13 +293,11 @@ def tessellate_by_type(shape, deflection: float):
 def _face_table(shape) -> tuple[dict, list]:
     by_type, areas = {}, []
     for face in faces_of(shape):
-        name = face_type(face)
-        props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(face, props)
+        name, area = face_type(face), face_area(face)
         by_type.setdefault(name, {"count": 0, "area": 0.0})
         by_type[name]["count"] += 1
-        by_type[name]["area"] += props.Mass()
-        areas.append((name, props.Mass()))
+        by_type[name]["area"] += area
+        areas.append((name, area))
     return by_type, areas
 
 

@@ -28,7 +28,7 @@ from OCP.GeomAbs import GeomAbs_Shape  # noqa: E402
 from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface  # noqa: E402
 from OCP.gp import gp_Pnt  # noqa: E402
 
-from .geometry import DEG_MIN  # noqa: E402
+from .geometry import DEG_MIN, any_perp  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
@@ -130,8 +130,7 @@ def segment_chart(s, V: np.ndarray, F: np.ndarray):
     if s.kind != "plane":
         return disk_chart(V, F)
     n = s.params["normal"]
-    e1 = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
-    e1 /= np.linalg.norm(e1)
+    e1 = any_perp(n)
     Q = V - s.params["point"]
     return orient_chart(np.c_[Q @ e1, Q @ np.cross(n, e1)], F)
 

@@ -43,7 +43,7 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector",
+__all__ = ["any_perp", "occ_surface", "seam_away_from", "seam_frame", "start_at_seam", "Projector",
            "onto_surfaces", "edge_curve", "curve_distance", "polyline_distance"]
 
 #: Points on a line or circle within this fraction of the bbox diagonal make an exact
@@ -66,8 +66,14 @@ def _dir(d) -> gp_Dir:
     return gp_Dir(float(d[0]), float(d[1]), float(d[2]))
 
 
-def _any_perp(a) -> np.ndarray:
-    """A unit vector perpendicular to ``a``."""
+def any_perp(a) -> np.ndarray:
+    """A unit vector perpendicular to ``a`` ((3,) float64, nonzero).
+
+    Examples
+    --------
+    >>> any_perp([0.0, 0.0, 2.0]).tolist()
+    [0.0, 1.0, 0.0]
+    """
     a = np.asarray(a, dtype=np.float64)
     v = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
     return v / np.linalg.norm(v)
@@ -85,7 +91,7 @@ def _seam_x(axis) -> np.ndarray:
     a = np.asarray(axis, dtype=np.float64)
     x = SEAM_REFERENCE - (SEAM_REFERENCE @ a) * a
     n = np.linalg.norm(x)
-    return x / n if n > 1e-6 else _any_perp(a)
+    return x / n if n > 1e-6 else any_perp(a)
 
 
 def _ax3(origin, axis, outward: bool, seam_angle: float = 0.0) -> gp_Ax3:

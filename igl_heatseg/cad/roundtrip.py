@@ -21,13 +21,11 @@ from OCP.Bnd import Bnd_Box  # noqa: E402
 from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
-from OCP.BRepGProp import BRepGProp  # noqa: E402
-from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-from .fidelity import faces_of  # noqa: E402
+from .fidelity import face_area, faces_of  # noqa: E402
 from .step import read_step, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -129,12 +127,6 @@ def _vertex_keys(face, scale: float) -> set:
     return out
 
 
-def _area(face) -> float:
-    props = GProp_GProps()
-    BRepGProp.SurfaceProperties_s(face, props)
-    return float(props.Mass())
-
-
 def _stray_faces(shape, back) -> list:
     """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face that
     comes back with more than STRAY_AREA_FACTOR times the area of the face it came from (the
@@ -152,9 +144,9 @@ def _stray_faces(shape, back) -> list:
         if i is None:
             continue
         if i not in areas:
-            areas[i] = abs(_area(mine[i]))
+            areas[i] = abs(face_area(mine[i]))
         b = _box(g)
-        grown = _area(g) > STRAY_AREA_FACTOR * areas[i] + 1e-6 * diag ** 2
+        grown = face_area(g) > STRAY_AREA_FACTOR * areas[i] + 1e-6 * diag ** 2
         if grown or np.any(b[0] < box[0] - slack) or np.any(b[1] > box[1] + slack):
             out.append(mine[i])
     return _dedupe(out)

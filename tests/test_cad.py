@@ -329,6 +329,43 @@ def test_plane_farther_than_the_tolerance_is_built_as_a_bspline_face(tmp_path):
     assert len(faces_of(read_step(write_step(res.shape, tmp_path / "p.step")))) == 6
 
 
+def bulged_box(n: int, h: float, sides):
+    """box_mesh(n) with the given sides pushed out by ``h (1 - u^2)(1 - v^2)`` (edges kept)."""
+    V, F, labels = box_mesh(n)
+    V = V.copy()
+    normals = [np.asarray(s.params["normal"]) for s in box_planes()]
+    for side in sides:
+        vs = np.unique(F[labels == side])
+        nrm = normals[side]
+        t = V[vs] - np.outer(V[vs] @ nrm, nrm)  # the two in-plane coordinates, in [-1, 1]
+        V[vs] += np.outer(h * np.prod(1.0 - t**2, axis=1), nrm)
+    return V, F, labels
+
+
+def test_plane_within_tolerance_but_misfit_is_built_as_a_bspline_face():
+    # one side bulges by 0.02 (tol 1 % of the 3.46 diagonal = 0.035): its plane is within
+    # the tolerance, but its RMS is far above the other sides' (0), so a B-spline is closer
+    V, F, labels = bulged_box(8, 0.02, [2])
+    res = build_brep(V, F, labels, box_planes())
+    assert res.not_built == []
+    assert res.faces[2]["kind"] == "plane" and res.faces[2]["built_as"] == "bspline"
+    assert res.faces[2]["max_dev"] < 0.02 / 4  # the B-spline's deviation; the plane's is 0.02
+    assert {f["built_as"] for i, f in enumerate(res.faces) if i != 2} == {"plane"}
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
+    assert fid["hausdorff_rel"] * fid["bbox_diagonal"] < 0.02 / 4
+    assert fid["volume_rel_error"] < 1e-3
+
+
+def test_sides_that_all_misfit_alike_keep_their_planes():
+    # the same bulge on every side is the part's typical residual (noise, as the fits see
+    # it): no side stands out, every side keeps its plane
+    V, F, labels = bulged_box(8, 0.02, range(6))
+    res = build_brep(V, F, labels, box_planes())
+    assert [f["built_as"] for f in res.faces] == ["plane"] * 6
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
 def test_wrong_cylinder_gives_faceted_side_in_a_closed_solid(tmp_path):
     R, H = 1.5, 2.0
     prof = polyline([(0, 0), (R, 0)], 2) + polyline([(R, 0), (R, H)], 2)[1:] \

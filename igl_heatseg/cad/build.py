@@ -44,6 +44,7 @@ from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
+from .segments import typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
 
@@ -55,6 +56,13 @@ __all__ = ["CadResult", "build_brep"]
 #: vertices lie farther than this from its surface is not built (faceted instead).  Loose
 #: enough for scan noise, tight enough to reject a wrong surface type.
 DEFAULT_TOL_REL = 1e-2
+
+#: An analytic segment whose vertex RMS distance is above this multiple of the part's typical
+#: one (:func:`~igl_heatseg.cad.segments.typical_rms`) and above MISFIT_RMS_FLOOR tolerances
+#: misses a shape the noise does not explain (a gear's involute flank as a plane: the lands
+#: beside it were trimmed at its chord and failed the area check); it gets a B-spline face
+#: when one fits it closer than its surface.
+MISFIT_RMS_RATIO, MISFIT_RMS_FLOOR = 2.0, 0.05
 
 #: Edge curves (B-splines) approximate their points to this fraction of the tolerance, so
 #: curve error never dominates the fit error.
@@ -107,9 +115,9 @@ class CadResult:
         A solid when the mesh was closed and the shell closed, else a shell or compound.
     faces : list of dict
         One per segment: ``index``, ``kind``, ``status`` (``"built"`` or ``"faceted"``),
-        ``reason`` (None when built), ``built_as`` (the fitted ``kind``, or ``"bspline"``
-        for an analytic segment farther than the tolerance from its surface but within it of
-        a B-spline fitted over its chart; None when faceted), ``max_dev`` (largest vertex
+        ``reason`` (None when built), ``built_as`` (the fitted ``kind``, or ``"bspline"`` for
+        an analytic segment farther than the tolerance from its surface, or misfit by it, that
+        a B-spline over its chart fits better; None when faceted), ``max_dev`` (largest vertex
         distance to the surface built, else to the fitted one).
     fidelity : dict
         :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
@@ -195,24 +203,28 @@ def _segment(V, F, faces):
     return verts, Fl.reshape(-1, 3)
 
 
-def _surface_for(a, s, V, F, faces, uv, tol, bspline=True):
+def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf):
     """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable.
-    An analytic surface farther than ``tol`` from the segment is replaced, when ``bspline``,
-    by a B-spline fitted over the segment's chart (:func:`freeform.segment_chart`)."""
+    An analytic surface farther than ``tol`` from the segment, or whose vertex RMS distance is
+    above ``misfit``, is replaced, when ``bspline``, by a B-spline fitted over the segment's
+    chart (:func:`freeform.segment_chart`); in the second case only when the B-spline is the
+    closer of the two."""
     verts, Fl = _segment(V, F, faces)
     if s.is_analytic:
-        dev = float(np.abs(s.distance(V[verts])).max())
-        if dev <= tol:
+        d = np.abs(s.distance(V[verts]))
+        dev, rms = float(d.max()), float(np.sqrt(np.mean(d**2)))
+        within = dev <= tol
+        UV = freeform.segment_chart(s, V[verts], Fl) if bspline and (
+            not within or rms > misfit) else None
+        geom, err = (None, math.nan) if UV is None else \
+            freeform.freeform_surface(V[verts], Fl, UV, tol)
+        if geom is not None and err <= tol and not (within and err >= dev):
+            return geom, geometry.Projector(None, geom), err, None
+        if within:  # the analytic surface: no B-spline needed, or none closer
             geom = geometry.occ_surface(s)
             return geom, geometry.Projector(s, geom), dev, None
         why = f"surface deviates {dev:.3g} from its segment (tol {tol:.3g})"
-        UV = freeform.segment_chart(s, V[verts], Fl) if bspline else None
-        if UV is None:  # else a B-spline face rather than the faceted patch
-            return None, None, dev, why
-        geom, err = freeform.freeform_surface(V[verts], Fl, UV, tol)
-        if geom is None or err > tol:
-            return None, None, dev, f"{why}; B-spline fit error {err:.3g}"
-        return geom, geometry.Projector(None, geom), err, None
+        return None, None, dev, why if UV is None else f"{why}; B-spline fit error {err:.3g}"
     UV = None
     if uv is not None and uv[a] is not None:
         ids, UVg = (np.asarray(x) for x in uv[a])
@@ -547,8 +559,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         used for freeform segments (a disk segment without one gets a harmonic chart).
     tol : float, optional
         Modelling tolerance (model units): a segment farther than this from its analytic
-        surface gets a B-spline face within it over its chart (``built_as="bspline"``), else
-        is faceted. Default :data:`DEFAULT_TOL_REL` times the bbox diagonal.
+        surface (or misfit by it: MISFIT_RMS_RATIO) gets a B-spline face over its chart within
+        it when one fits closer (else it is faceted). Default DEFAULT_TOL_REL x the diagonal.
     progress : callable, optional
         ``progress(stage, fraction)``.
 
@@ -588,6 +600,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
     closed = _is_closed(F)
+    ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
+                            MISFIT_RMS_FLOOR * ctx["tol"])
     timings: dict = {}
     ctx["bspline"], ctx["fallbacks"] = True, set()
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
@@ -720,7 +734,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
         if a not in cache:
             try:
                 cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
-                                    bspline=ctx.get("bspline", True))
+                                        bspline=ctx.get("bspline", True),
+                                        misfit=ctx["misfit_rms"])
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
                 logger.warning("segment %d: surface not built (%s)", a, exc)

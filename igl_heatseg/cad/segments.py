@@ -14,7 +14,7 @@ from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
 from igl_heatseg.surfaces.select import fit_surface
 from igl_heatseg.surfaces.tolerance import vertex_tolerance
 
-__all__ = ["fit_segment_surfaces", "chart_uvs"]
+__all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms"]
 
 
 def fit_segment_surfaces(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
@@ -59,6 +59,53 @@ def fit_segment_surfaces(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
         P, N, w = vertex_samples(V, F, faces)
         out.append(fit_surface(P, N, w, tol=tol))
     return out
+
+
+def typical_rms(V: np.ndarray, F: np.ndarray, labels: np.ndarray, surfaces) -> float:
+    """The part's noise as its fits see it: the area-weighted median, over the analytic
+    segments, of the RMS distance of a segment's vertices to its surface.
+
+    Noise is about even over a scanned part, so a segment whose RMS is several times this one
+    misses a shape that its surface does not have (``build_brep`` gives it a B-spline face).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    surfaces : list of Surface, length k
+
+    Returns
+    -------
+    float
+        Model units; 0 without analytic segments.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.2]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> round(typical_rms(V, F, np.array([0, 0]), [z]), 6)      # sqrt(0.2^2 / 4)
+    0.1
+    """
+    areas = np.bincount(labels, weights=0.5 * np.linalg.norm(
+        np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1),
+        minlength=len(surfaces))
+    rms, w = [], []
+    for a, s in enumerate(surfaces):
+        if s.is_analytic:
+            verts = np.unique(F[labels == a])
+            rms.append(float(np.sqrt(np.mean(s.distance(V[verts]) ** 2))))
+            w.append(areas[a])
+    if not rms:
+        return 0.0
+    rms, w = np.asarray(rms), np.asarray(w)
+    order = np.argsort(rms)
+    c = np.cumsum(w[order])
+    return float(rms[order][min(int(np.searchsorted(c, 0.5 * c[-1])), len(c) - 1)])
 
 
 def chart_uvs(labels: np.ndarray, surfaces, charts) -> list:

@@ -357,6 +357,19 @@ def test_plane_within_tolerance_but_misfit_is_built_as_a_bspline_face():
     assert fid["volume_rel_error"] < 1e-3
 
 
+
+def test_misfit_segment_keeps_its_surface_when_the_bspline_fit_fails(monkeypatch):
+    import igl_heatseg.cad.freeform as freeform
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("Standard_Failure")
+
+    monkeypatch.setattr(freeform, "freeform_surface", fail)
+    V, F, labels = bulged_box(8, 0.02, [2])
+    res = build_brep(V, F, labels, box_planes())
+    assert [f["built_as"] for f in res.faces] == ["plane"] * 6  # within tol: not faceted
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
 def test_sides_that_all_misfit_alike_keep_their_planes():
     # the same bulge on every side is the part's typical residual (noise, as the fits see
     # it): no side stands out, every side keeps its plane

@@ -44,7 +44,7 @@ from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
-from .segments import typical_rms  # noqa: E402
+from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
 
@@ -155,49 +155,6 @@ class CadResult:
         }
 
 
-def _validate(V, F, labels, surfaces, uv):
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F)
-    labels = np.asarray(labels)
-    if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
-        raise MeshError(f"V must be (n, 3) float64, got shape {V.shape}")
-    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0 or not np.issubdtype(F.dtype, np.integer):
-        raise MeshError(f"F must be (m, 3) int64, got shape {F.shape} dtype {F.dtype}")
-    F = F.astype(np.int64)
-    if F.min() < 0 or F.max() >= len(V):
-        raise MeshError(f"F indexes vertices outside 0..{len(V) - 1} (V has shape {V.shape})")
-    if labels.shape != (len(F),) or not np.issubdtype(labels.dtype, np.integer):
-        raise MeshError(f"labels must be ({len(F)},) int64, got shape {labels.shape}")
-    labels = labels.astype(np.int64)
-    k = len(surfaces)
-    if labels.min() < 0 or labels.max() >= k:
-        raise MeshError(f"labels must lie in 0..{k - 1} (one per surface; {k} surfaces given), "
-                        f"found {labels.min()}..{labels.max()}")
-    if not all(isinstance(s, Surface) for s in surfaces):
-        raise MeshError("surfaces must be igl_heatseg.surfaces.model.Surface objects")
-    if uv is not None:
-        _validate_uv(uv, k, len(V))
-    if not np.all(np.isfinite(V)):
-        raise MeshError(f"V (shape {V.shape}) has non-finite coordinates")
-    return V, F, labels
-
-
-def _validate_uv(uv, k: int, n: int) -> None:
-    if len(uv) != k:
-        raise MeshError(f"uv must have one entry (or None) per segment: {k}, got {len(uv)}")
-    for a, entry in enumerate(uv):
-        if entry is None:
-            continue
-        ids, UV = (np.asarray(x) for x in entry)
-        if ids.ndim != 1 or not np.issubdtype(ids.dtype, np.integer) or \
-                (len(ids) and (ids.min() < 0 or ids.max() >= n)):
-            raise MeshError(f"uv[{a}] vertex ids must be (p,) int64 in 0..{n - 1}, "
-                            f"got shape {ids.shape} dtype {ids.dtype}")
-        if UV.shape != (len(ids), 2) or not np.all(np.isfinite(UV)):
-            raise MeshError(f"uv[{a}] UV must be ({len(ids)}, 2) finite float64, "
-                            f"got shape {UV.shape}")
-
-
 def _segment(V, F, faces):
     verts, Fl = np.unique(F[faces], return_inverse=True)
     return verts, Fl.reshape(-1, 3)
@@ -214,10 +171,15 @@ def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf):
         d = np.abs(s.distance(V[verts]))
         dev, rms = float(d.max()), float(np.sqrt(np.mean(d**2)))
         within = dev <= tol
-        UV = freeform.segment_chart(s, V[verts], Fl) if bspline and (
-            not within or rms > misfit) else None
-        geom, err = (None, math.nan) if UV is None else \
-            freeform.freeform_surface(V[verts], Fl, UV, tol)
+        try:
+            UV = freeform.segment_chart(s, V[verts], Fl) if bspline and (
+                not within or rms > misfit) else None
+            geom, err = (None, math.nan) if UV is None else \
+                freeform.freeform_surface(V[verts], Fl, UV, tol)
+        except Exception:  # noqa: BLE001 (OCC, numpy): within the tolerance, keep the surface
+            if not within:
+                raise
+            UV, geom, err = None, None, math.nan
         if geom is not None and err <= tol and not (within and err >= dev):
             return geom, geometry.Projector(None, geom), err, None
         if within:  # the analytic surface: no B-spline needed, or none closer
@@ -594,7 +556,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     >>> res.fidelity["valid"], res.fidelity["solids"], round(res.fidelity["volume"], 9)
     (True, 1, 1.0)
     """
-    V, F, labels = _validate(V, F, labels, surfaces, uv)
+    V, F, labels = check_inputs(V, F, labels, surfaces, uv)
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces

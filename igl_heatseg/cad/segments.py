@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from igl_heatseg.errors import MeshError
 from igl_heatseg.surfaces.model import Surface
 from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
 from igl_heatseg.surfaces.select import fit_surface
 from igl_heatseg.surfaces.tolerance import vertex_tolerance
 
-__all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms"]
+__all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms", "check_inputs"]
 
 
 def fit_segment_surfaces(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
@@ -171,3 +172,79 @@ def _pieces_of_one_map(charts) -> bool:
     return len({c.split_from for c in charts}) == 1 and charts[0].split_from is not None and all(
         c.param is not None and c.param.attempts
         and c.param.attempts[-1].get("method") == "cut for packing" for c in charts)
+
+
+def check_inputs(V, F, labels, surfaces, uv=None):
+    """The arrays of :func:`~igl_heatseg.cad.build.build_brep`, checked and converted.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like of float
+    F : (m, 3) array_like of int
+    labels : (m,) array_like of int
+        In ``0..len(surfaces) - 1``.
+    surfaces : list of Surface
+    uv : list of (ids (p,), UV (p, 2)) or None, optional
+        One entry (or None) per segment.
+
+    Returns
+    -------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+
+    Raises
+    ------
+    MeshError
+        Naming the array at fault and its shape, dtype or range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> check_inputs(V, np.array([[0, 1, 3]]), np.array([0]), [z])
+    Traceback (most recent call last):
+    ...
+    igl_heatseg.errors.MeshError: F indexes vertices outside 0..2 (V has shape (3, 3))
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    labels = np.asarray(labels)
+    if V.ndim != 2 or V.shape[1] != 3 or len(V) == 0:
+        raise MeshError(f"V must be (n, 3) float64, got shape {V.shape}")
+    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0 or not np.issubdtype(F.dtype, np.integer):
+        raise MeshError(f"F must be (m, 3) int64, got shape {F.shape} dtype {F.dtype}")
+    F = F.astype(np.int64)
+    if F.min() < 0 or F.max() >= len(V):
+        raise MeshError(f"F indexes vertices outside 0..{len(V) - 1} (V has shape {V.shape})")
+    if labels.shape != (len(F),) or not np.issubdtype(labels.dtype, np.integer):
+        raise MeshError(f"labels must be ({len(F)},) int64, got shape {labels.shape}")
+    labels = labels.astype(np.int64)
+    k = len(surfaces)
+    if labels.min() < 0 or labels.max() >= k:
+        raise MeshError(f"labels must lie in 0..{k - 1} (one per surface; {k} surfaces given), "
+                        f"found {labels.min()}..{labels.max()}")
+    if not all(isinstance(s, Surface) for s in surfaces):
+        raise MeshError("surfaces must be igl_heatseg.surfaces.model.Surface objects")
+    if uv is not None:
+        _validate_uv(uv, k, len(V))
+    if not np.all(np.isfinite(V)):
+        raise MeshError(f"V (shape {V.shape}) has non-finite coordinates")
+    return V, F, labels
+
+
+def _validate_uv(uv, k: int, n: int) -> None:
+    if len(uv) != k:
+        raise MeshError(f"uv must have one entry (or None) per segment: {k}, got {len(uv)}")
+    for a, entry in enumerate(uv):
+        if entry is None:
+            continue
+        ids, UV = (np.asarray(x) for x in entry)
+        if ids.ndim != 1 or not np.issubdtype(ids.dtype, np.integer) or \
+                (len(ids) and (ids.min() < 0 or ids.max() >= n)):
+            raise MeshError(f"uv[{a}] vertex ids must be (p,) int64 in 0..{n - 1}, "
+                            f"got shape {ids.shape} dtype {ids.dtype}")
+        if UV.shape != (len(ids), 2) or not np.all(np.isfinite(UV)):
+            raise MeshError(f"uv[{a}] UV must be ({len(ids)}, 2) finite float64, "
+                            f"got shape {UV.shape}")

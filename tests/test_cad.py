@@ -320,6 +320,7 @@ def test_plane_farther_than_the_tolerance_is_built_as_a_bspline_face(tmp_path):
     assert res.not_built == []
     assert res.faces[2]["kind"] == "plane" and res.faces[2]["built_as"] == "bspline"
     assert res.faces[2]["max_dev"] < 1e-6  # the B-spline's deviation, not the plane's 2
+    assert res.faces[2]["why_bspline"].startswith("plane deviates 2 (tol 0.0346)")
     assert {f["built_as"] for i, f in enumerate(res.faces) if i != 2} == {"plane"}
     fid = res.fidelity
     assert fid["faces"] == 6 and fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0
@@ -350,6 +351,8 @@ def test_plane_within_tolerance_but_misfit_is_built_as_a_bspline_face():
     assert res.not_built == []
     assert res.faces[2]["kind"] == "plane" and res.faces[2]["built_as"] == "bspline"
     assert res.faces[2]["max_dev"] < 0.02 / 4  # the B-spline's deviation; the plane's is 0.02
+    assert res.faces[2]["why_bspline"].startswith("plane within the tolerance but misfit")
+    assert all(f["why_bspline"] is None for i, f in enumerate(res.faces) if i != 2)
     assert {f["built_as"] for i, f in enumerate(res.faces) if i != 2} == {"plane"}
     fid = res.fidelity
     assert fid["valid"] and fid["solids"] == 1 and fid["free_edges"] == 0

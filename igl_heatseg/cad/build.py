@@ -118,7 +118,8 @@ class CadResult:
         ``reason`` (None when built), ``built_as`` (the fitted ``kind``, or ``"bspline"`` for
         an analytic segment farther than the tolerance from its surface, or misfit by it, that
         a B-spline over its chart fits better; None when faceted), ``max_dev`` (largest vertex
-        distance to the surface built, else to the fitted one).
+        distance to the surface built, else to the fitted one), ``why_bspline`` (for those
+        B-spline faces, which test sent them there and both fits' deviations; else None).
     fidelity : dict
         :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
     timings : dict
@@ -160,12 +161,12 @@ def _segment(V, F, faces):
     return verts, Fl.reshape(-1, 3)
 
 
-def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf):
+def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes=None):
     """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable.
     An analytic surface farther than ``tol`` from the segment, or whose vertex RMS distance is
     above ``misfit``, is replaced, when ``bspline``, by a B-spline fitted over the segment's
     chart (:func:`freeform.segment_chart`); in the second case only when the B-spline is the
-    closer of the two."""
+    closer of the two. ``notes[a]`` then says why (for the report)."""
     verts, Fl = _segment(V, F, faces)
     if s.is_analytic:
         d = np.abs(s.distance(V[verts]))
@@ -181,6 +182,11 @@ def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf):
                 raise
             UV, geom, err = None, None, math.nan
         if geom is not None and err <= tol and not (within and err >= dev):
+            if notes is not None:
+                notes[a] = (f"{s.kind} within the tolerance but misfit: vertex RMS {rms:.3g} "
+                            f"above {misfit:.3g}" if within else
+                            f"{s.kind} deviates {dev:.3g} (tol {tol:.3g})") + \
+                    f"; B-spline within {err:.3g}, the {s.kind} within {dev:.3g}"
             return geom, geometry.Projector(None, geom), err, None
         if within:  # the analytic surface: no B-spline needed, or none closer
             geom = geometry.occ_surface(s)
@@ -562,6 +568,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
     closed = _is_closed(F)
+    ctx["notes"] = {}
     ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
                             MISFIT_RMS_FLOOR * ctx["tol"])
     timings: dict = {}
@@ -697,7 +704,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             try:
                 cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
                                         bspline=ctx.get("bspline", True),
-                                        misfit=ctx["misfit_rms"])
+                                        misfit=ctx["misfit_rms"], notes=ctx["notes"])
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
                 logger.warning("segment %d: surface not built (%s)", a, exc)
@@ -757,6 +764,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
         status.append(dict(index=a, kind=ctx["fitted"][a].kind,
                            status="built" if face is not None else "faceted", reason=reason,
                            built_as=built_as[a] if face is not None else None,
-                           max_dev=None if not np.isfinite(devs[a]) else float(devs[a])))
+                           max_dev=None if not np.isfinite(devs[a]) else float(devs[a]),
+                           why_bspline=ctx["notes"].get(a) if built_as[a] == "bspline" and
+                           face is not None and ctx["fitted"][a].is_analytic else None))
     timings["faces"] = time.perf_counter() - t
     return faces, status, ctx["sew_tol"], owner

@@ -22,7 +22,9 @@ again, and the table's header says at which commits its rows were run and whethe
 tools ran side by side.
 
 Results are cached per tool and part in ``WORK/results`` (a rerun continues); ``--table``
-only writes the table from the cache.
+only writes the table from the cache. The table goes to ``WORK/cad_results.md`` unless
+``--md`` names another file (``benchmarks/cad_results.md`` keeps the measured history by hand:
+the table is pasted into it, not written over it).
 
 Usage::
 
@@ -467,7 +469,9 @@ def main(argv=None) -> int:
     ap.add_argument("--table", action="store_true", help="only write the table from the cache")
     ap.add_argument("--rescore", action="store_true",
                     help="only score cached results again where the surface samples are missing")
-    ap.add_argument("--md", type=Path, default=ROOT / "benchmarks" / "cad_results.md")
+    ap.add_argument("--md", type=Path, default=None,
+                    help="where the table goes (default WORK/cad_results.md; the file is "
+                    "overwritten)")
     ap.add_argument("--figures", nargs="*", metavar="PART", default=None,
                     help="render these parts' STEP files to benchmarks/figures/")
     args = ap.parse_args(argv)
@@ -496,7 +500,7 @@ def main(argv=None) -> int:
             q.join()
     command = "python benchmarks/bench_cad.py " + " ".join(argv if argv is not None
                                                           else sys.argv[1:])
-    print(write_table(parts, work, args.md, command))
+    print(write_table(parts, work, args.md or work / "cad_results.md", command))
     if args.figures:
         figures(parts, work, args.figures, ROOT / "benchmarks" / "figures")
     return 0

@@ -528,7 +528,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     tol : float, optional
         Modelling tolerance (model units): a segment farther than this from its analytic
         surface (or misfit by it: MISFIT_RMS_RATIO) gets a B-spline face over its chart within
-        it when one fits closer (else it is faceted). Default DEFAULT_TOL_REL x the diagonal.
+        it when one fits closer (else a far one is faceted). Default DEFAULT_TOL_REL x diag.
     progress : callable, optional
         ``progress(stage, fraction)``.
 

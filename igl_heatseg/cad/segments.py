@@ -15,6 +15,8 @@ from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
 from igl_heatseg.surfaces.select import fit_surface
 from igl_heatseg.surfaces.tolerance import vertex_tolerance
 
+from .topology import segment_areas
+
 __all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms", "check_inputs"]
 
 
@@ -92,9 +94,7 @@ def typical_rms(V: np.ndarray, F: np.ndarray, labels: np.ndarray, surfaces) -> f
     >>> round(typical_rms(V, F, np.array([0, 0]), [z]), 6)      # sqrt(0.2^2 / 4)
     0.1
     """
-    areas = np.bincount(labels, weights=0.5 * np.linalg.norm(
-        np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1),
-        minlength=len(surfaces))
+    areas = segment_areas(V, F, labels, len(surfaces))
     rms, w = [], []
     for a, s in enumerate(surfaces):
         if s.is_analytic:

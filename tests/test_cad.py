@@ -692,6 +692,34 @@ def test_faces_with_loose_edges_are_meshed_at_their_edges_tolerance():
     assert fid["hausdorff"] < 1e-9
 
 
+def test_mesh_on_a_coarsely_meshed_face_gets_exact_distances(monkeypatch):
+    """A face with loose edges is meshed at their tolerance, and its chords are no ruler: a
+    mesh lying on the exact cylinder measures 1.6 fine deflections off them; the farthest
+    mesh vertices are projected onto such faces instead, down to the fine deflection."""
+    from igl_heatseg.cad import fidelity
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    from igl_heatseg.cad.fidelity import tessellate
+
+    exact = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()
+    V, F = tessellate(exact, 1e-5)[:2]  # the mesh: on the cylinder to 1e-5
+    loose = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()
+    ex = TopExp_Explorer(loose, TopAbs_EDGE)
+    while ex.More():
+        BRep_Builder().UpdateEdge(TopoDS.Edge(ex.Current()), 0.2)
+        ex.Next()
+    fine = fidelity.MESH_DEFLECTION_REL * np.sqrt(2.0**2 + 2.0**2 + 2.0**2)
+    fid = brep_fidelity(loose, V, F)
+    assert fid["measurement_deflection"] == pytest.approx(0.2)
+    assert fid["hausdorff_mesh_to_brep"] <= fine
+    monkeypatch.setattr(fidelity, "_projected_distances", lambda V, d, *args: d)
+    assert brep_fidelity(loose, V, F)["hausdorff_mesh_to_brep"] > 1.5 * fine  # the chords
+
+
 def test_face_invalid_only_after_the_step_round_trip_is_found(monkeypatch):
     """A sewn torus passed BRepCheck in memory and failed once written to STEP and read back;
     the check reads the file back and names the in-memory face at the same place."""

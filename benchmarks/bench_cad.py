@@ -189,6 +189,12 @@ def sampled_distance(shape, V, F) -> float:
     return float(np.sqrt(igl.point_mesh_squared_distance(np.array(P), V, F)[0]).max())
 
 
+#: Version of :func:`score`'s measurement; ``--rescore`` scores again the cached results scored
+#: by an older one (2: mesh vertices near faces meshed at their loose edges' tolerance get
+#: distances to the exact surface, not to its chords).
+SCORE_VERSION = 2
+
+
 def score(step: Path, obj: str, clean: str | None = None) -> dict:
     """brep_fidelity of a STEP file against the mesh (both tools the same way) and, for a
     noisy part, ``clean_hausdorff_rel``: the two-sided Hausdorff distance to the noise-free
@@ -211,7 +217,8 @@ def score(step: Path, obj: str, clean: str | None = None) -> dict:
     keep = ("valid", "solids", "shells", "faces", "free_edges", "faces_by_type", "hausdorff_rel",
             "sampled_rel",
             "rms", "volume_rel_error", "faces_not_tessellated", "clean_hausdorff_rel")
-    return dict({k: fid[k] for k in keep}, exact=exact, triangles=int(len(mesh.F)))
+    return dict({k: fid[k] for k in keep}, exact=exact, triangles=int(len(mesh.F)),
+                score_version=SCORE_VERSION)
 
 
 def run_ours(part: dict, work: Path) -> dict:
@@ -285,8 +292,8 @@ def _stale(tool: str, res: dict, commit: str) -> bool:
 
 def run_queue(tool: str, parts: list[dict], work: Path, fn) -> None:
     """Run ``fn`` on every part without a cached result of this commit (``fn`` None: only
-    score again the cached results scored before the surface samples or the distance to the
-    noise-free part existed)."""
+    score again the cached results scored before the distance to the noise-free part existed,
+    or by a :data:`SCORE_VERSION` older than this one)."""
     commit = _commit()
     for part in parts:
         path = _cached(work, tool, part["name"])
@@ -298,7 +305,8 @@ def run_queue(tool: str, parts: list[dict], work: Path, fn) -> None:
                 print(f"{tool:8s} {part['name']:40s} cached at {res.get('commit', '?')}, "
                       f"now {commit}: run again", flush=True)
             else:
-                if res["status"] == "ok" and "clean_hausdorff_rel" not in res:  # scored before
+                if res["status"] == "ok" and (res.get("score_version", 1) < SCORE_VERSION
+                                              or "clean_hausdorff_rel" not in res):
                     res.update(score(step_of(work, tool, part["name"]), part["obj"],
                                      part["clean"]))
                     path.write_text(json.dumps(res, indent=1, default=float) + "\n")
@@ -468,7 +476,8 @@ def main(argv=None) -> int:
                     "last parts of the list); the table still lists the whole set")
     ap.add_argument("--table", action="store_true", help="only write the table from the cache")
     ap.add_argument("--rescore", action="store_true",
-                    help="only score cached results again where the surface samples are missing")
+                    help="only score cached results again where the distance to the noise-free "
+                    "part is missing or SCORE_VERSION has changed")
     ap.add_argument("--md", type=Path, default=None,
                     help="where the table goes (default WORK/cad_results.md; the file is "
                     "overwritten)")

@@ -61,6 +61,7 @@ from .split import (
     ransac_regions,
     real_split,
 )
+from .strays import shed_strays
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -767,6 +768,8 @@ def refine_segmentation(
     timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
+    if shed_strays(V, F, labels, fits, tol, TT, FN):  # refitted below
+        labels = _face_connected(F, labels, TT)  # a donor may fall apart
     timings["shards"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -1,0 +1,58 @@
+"""Stray border faces (a triangle standing across its segment's surface) go to their neighbour."""
+
+from __future__ import annotations
+
+import igl
+import numpy as np
+
+from igl_heatseg.mesh.geometry import face_normals
+from igl_heatseg.surfaces.model import Surface
+from igl_heatseg.surfaces.strays import shed_strays
+from meshes import cube
+
+
+def _sides(V, F):
+    """Cube side of every face (0..5: +z -z +x -x +y -y) and the six planes."""
+    FN = face_normals(V, F)
+    axes = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]], float)
+    labels = np.argmax(FN @ axes.T, axis=1)
+    fits = {k: Surface("plane", {"point": a, "normal": a}) for k, a in enumerate(axes)}
+    return labels, fits, FN
+
+
+def test_triangles_across_an_edge_go_back_to_their_side():
+    V, F = cube(6)
+    labels, fits, FN = _sides(V, F)
+    truth = labels.copy()
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    # three +x triangles along the edge with +z labelled +z (a flank on a side plane)
+    edge = np.flatnonzero((labels == 2) & (TT >= 0).all(axis=1) &
+                          (labels[np.maximum(TT, 0)] == 0).any(axis=1))[:3]
+    assert len(edge) == 3
+    labels[edge] = 0
+    assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 3
+    assert np.array_equal(labels, truth)
+
+
+def test_noise_makes_no_strays():
+    # noise of a fifth of an edge (the tolerance as the noise: half of it) tilts the normals,
+    # not by 60 degrees: nothing moves
+    V, F = cube(6)
+    labels, fits, _ = _sides(V, F)
+    truth = labels.copy()
+    sigma = 0.2 * 2.0 / 6
+    V = V + np.random.default_rng(1).normal(0.0, sigma, V.shape)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    assert shed_strays(V, F, labels, fits, 0.5 * sigma, TT, face_normals(V, F)) == 0
+    assert np.array_equal(labels, truth)
+
+
+def test_a_segment_of_strays_is_not_emptied():
+    V, F = cube(6)
+    labels, fits, FN = _sides(V, F)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    one = np.flatnonzero(labels == 2)[0]
+    labels[one] = 6  # one +x triangle with the +z plane: a stray, but all of its segment
+    fits[6] = fits[0]
+    assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 0
+    assert labels[one] == 6

@@ -56,3 +56,21 @@ def test_a_segment_of_strays_is_not_emptied():
     fits[6] = fits[0]
     assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 0
     assert labels[one] == 6
+
+
+def test_a_segment_is_not_cut_apart():
+    # the +z and -z sides labelled +z, joined by a strip of +x faces: the strip's faces are
+    # strays, but moving them would cut the segment in two, so they stay
+    from igl_heatseg.mesh.topology import label_pieces
+
+    V, F = cube(6)
+    labels, fits, FN = _sides(V, F)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    C = V[F].mean(axis=1)
+    strip = np.flatnonzero((labels == 2) & (np.abs(C[:, 1]) < 1.0 / 3))
+    labels[strip] = 0
+    labels[labels == 1] = 0
+    before = labels.copy()
+    assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 0
+    assert np.array_equal(labels, before)
+    assert len(np.unique(label_pieces(F, labels, TT)[labels == 0])) == 1

@@ -768,8 +768,7 @@ def refine_segmentation(
     timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
-    if shed_strays(V, F, labels, fits, tol, TT, FN):  # refitted below
-        labels = _face_connected(F, labels, TT)  # a donor may fall apart
+    shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     timings["shards"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..mesh.topology import label_pieces
 from .segment_fit import corner_rms, normal_angle
 
 __all__ = ["shed_strays"]
@@ -35,7 +36,7 @@ def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, to
     A face on a segment's border is a stray when its normal is more than STRAY_ANGLE from
     its surface's normal and its corners' RMS distance to the surface is above STRAY_TOL
     ``tol``: it stands across the surface (a flank triangle on a side plane), which noise
-    does not do. A segment is never emptied.
+    does not do. A segment is never emptied nor cut apart (then its strays stay).
 
     Parameters
     ----------
@@ -94,6 +95,10 @@ def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, to
         counts = np.bincount(new, minlength=labels.max() + 1)
         for k in np.flatnonzero((counts == 0) & (np.bincount(labels, minlength=len(counts)) > 0)):
             new[labels == k] = k  # never empty a segment
+        pieces = label_pieces(F, new, TT)
+        for k in np.unique(labels[new != labels]).tolist():
+            if len(np.unique(pieces[new == k])) > 1:  # nor cut one apart: its strays stay
+                new[labels == k] = k
         n = int((new != labels).sum())
         if n == 0:
             break

@@ -435,9 +435,10 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         ``valid`` (BRepCheck_Analyzer), ``solids``, ``shells``, ``faces``, ``free_edges``,
         ``faces_by_type`` (count and area per surface type), ``hausdorff`` (two-sided, mesh
         vertices to the B-Rep and B-Rep tessellation vertices to the mesh; the farthest mesh
-        vertices get exact BRepExtrema distances to the faces that were meshed coarser than
-        MESH_DEFLECTION_REL of the diagonal or not at all), ``rms`` (mesh vertices to the
-        B-Rep), ``hausdorff_rel`` (over the bbox diagonal),
+        vertices are measured to the exact surface of a nearest face meshed coarser than
+        MESH_DEFLECTION_REL of the diagonal (projected, inside the face) and by BRepExtrema to
+        faces not tessellated), ``rms`` (mesh vertices to the B-Rep), ``hausdorff_rel`` (over
+        the bbox diagonal),
         ``measurement_deflection`` (tessellation error bound of the distances: the largest
         deflection used, :func:`mesh_faces`),
         ``faces_not_tessellated`` (the B-Rep-to-mesh direction misses them), ``volume``,

@@ -18,6 +18,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    follow the crease instead of zig-zagging along triangle edges.
 5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut, then merge again
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
+6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
+   it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
+   neighbours that fit them, so a freeform neighbour's triangle stayed).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).

@@ -243,24 +243,26 @@ def _face_triangles(face, deflection: float):
 
 def _triangles(shape, deflection: float):
     """:func:`tessellate` of a shape already meshed."""
-    TV, TF, missing = _triangles_and_missing(shape, deflection)
+    TV, TF, _, missing = _triangles_and_missing(shape, deflection)
     return TV, TF, len(missing)
 
 
 def _triangles_and_missing(shape, deflection: float):
-    """(TV, TF, the faces left untessellated) of a shape already meshed."""
-    Vs, Fs, off, missing = [], [], 0, []
-    for face in faces_of(shape):
+    """(TV, TF, the face of each triangle in :func:`faces_of` order, the faces left
+    untessellated) of a shape already meshed."""
+    Vs, Fs, ids, off, missing = [], [], [], 0, []
+    for i, face in enumerate(faces_of(shape)):
         got = _face_triangles(face, deflection)
         if got is None:
             missing.append(face)
             continue
         Vs.append(got[0])
         Fs.append(got[1] + off)
+        ids.append(np.full(len(got[1]), i, dtype=np.int64))
         off += len(got[0])
     if not Vs:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), missing
-    return np.vstack(Vs), np.vstack(Fs).astype(np.int64), missing
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int64), missing
+    return np.vstack(Vs), np.vstack(Fs).astype(np.int64), np.concatenate(ids), missing
 
 
 def face_type(face) -> str:
@@ -297,20 +299,8 @@ def tessellate_by_type(shape, deflection: float):
     (['cylinder', 'plane', 'plane'], [0, 1, 2])
     """
     mesh_faces(shape, deflection)
-    Vs, Fs, ids, types, off = [], [], [], [], 0
-    for i, face in enumerate(faces_of(shape)):
-        types.append(face_type(face))
-        got = _face_triangles(face, deflection)
-        if got is None:
-            continue
-        P, T = got
-        Vs.append(P)
-        Fs.append(T + off)
-        ids.append(np.full(len(T), i, dtype=np.int64))
-        off += len(P)
-    if not Vs:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int64), types
-    return (np.vstack(Vs), np.vstack(Fs).astype(np.int64), np.concatenate(ids), types)
+    TV, TF, tri_face, _ = _triangles_and_missing(shape, deflection)
+    return TV, TF, tri_face, [face_type(face) for face in faces_of(shape)]
 
 
 def _face_table(shape) -> tuple[dict, list]:
@@ -330,19 +320,9 @@ def _distances(shape, V, F, diag):
     fine = MESH_DEFLECTION_REL * diag
     meshed = _mesh_each(shape, fine)
     deflection = max((d for _, d in meshed), default=fine)
-    Vs, Fs, ids, missing, off = [], [], [], [], 0
-    for k, (face, _) in enumerate(meshed):
-        got = _face_triangles(face, fine)
-        if got is None:
-            missing.append(face)
-            continue
-        Vs.append(got[0])
-        Fs.append(got[1] + off)
-        ids.append(np.full(len(got[1]), k, dtype=np.int64))
-        off += len(got[0])
-    if not Vs:
+    TV, TF, tri_face, missing = _triangles_and_missing(shape, fine)  # faces as in ``meshed``
+    if len(TF) == 0:
         return math.inf, math.inf, math.inf, len(missing), deflection
-    TV, TF, tri_face = np.vstack(Vs), np.vstack(Fs).astype(np.int64), np.concatenate(ids)
     d2, nearest, _ = igl.point_mesh_squared_distance(V, TV, TF)  # mesh vertices -> B-Rep
     d_mesh = np.sqrt(d2)
     # on a face meshed coarser than asked (loose edges), the chords are no ruler: the

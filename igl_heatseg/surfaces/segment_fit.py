@@ -93,7 +93,9 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
         Unit face normals by face id (computed from ``W`` or ``V`` when not given).
     trim : bool
         When no kind fits, refit without stray faces up to TRIM_SHARE of the area (a boundary a
-        triangle off).
+        triangle off); and a simpler kind that explains all but TRIM_SHARE of the area that
+        way replaces a curved fit (:func:`_simpler_on_most`: a slot's wall and one facet of
+        each round end lie on a sphere).
 
     Returns
     -------
@@ -118,7 +120,8 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
     # a kind needs more samples than parameters to be evidence (any 4 points lie on a sphere)
     allowed = tuple(k for k in (SURFACE_KINDS if kinds is None else kinds)
                     if k == "freeform" or len(P) >= PARAMS[k] + MIN_EXTRA_SAMPLES[k])
-    s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",))
+    tried: list = []
+    s = fit_surface(P, N, w, tol=tol, kinds=allowed or ("freeform",), candidates=tried)
     if trim and not s.is_analytic and len(faces) >= TRIM_MIN_FACES and s.rms <= max(
         TRIM_RMS * tol, TRIM_REL * float(np.ptp(P, axis=0).max())
     ):  # a stray face of an exact tessellation puts the RMS far above its tiny tol
@@ -133,13 +136,55 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
     FN = face_normals(V if W is None else W, F) if FN is None else FN
     while s.is_analytic:
         if normals_agree(V, F, FN, faces, s):
-            return s
+            return _simpler_on_most(V, F, faces, tol, s, tried, W, FN) if trim else s
         rest = allowed[allowed.index(s.kind) + 1:]
         if not rest:
             break
         s = fit_surface(P, N, w, tol=tol, kinds=rest)
     return Surface("freeform", {"centroid": P.mean(axis=0)}, rms=first.rms,
                    max_dev=first.max_dev, area=float(face_areas(V, F[faces]).sum()))
+
+
+def _simpler_on_most(V, F, faces, tol, s: Surface, tried: list, W, FN) -> Surface:
+    """A simpler kind than ``s`` that explains all but at most TRIM_SHARE of the area, else ``s``.
+
+    Any six points of a slot's flat wall (two long triangles) and of the first facet of each
+    round end lie on one sphere, and an exact tessellation's tolerance then takes it over the
+    plane those facets leave by 0.2 units: the sphere bulges 1.8 units between the wall's
+    vertices. A curved fit is kept only when no simpler candidate (``tried``, fitted to the
+    same samples) explains the segment without a few faces: one least-trimmed-squares step as
+    in :func:`_trimmed_fit` (the faces farthest from the candidate, TRIM_SHARE of the area,
+    left out and the kind refitted), then every face within GROW_TOL x tol of the refit but
+    at most TRIM_SHARE of the area, the refit on them within tolerance with agreeing normals.
+    The faces left out are handed to the neighbour they lie on by the boundary moves."""
+    rank = SURFACE_KINDS.index
+    simpler = [c for c in tried if rank(c.kind) < rank(s.kind)]
+    if not simpler:
+        return s
+    A = face_areas(V, F[faces])
+    for c in simpler:
+        order = np.argsort(corner_max_dev(V, F, faces, c), kind="stable")
+        keep = np.zeros(len(faces), dtype=bool)
+        keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
+        t = _kind_on(V, F, faces[keep], tol, c.kind, W)
+        if t is None:
+            continue
+        on = corner_max_dev(V, F, faces, t) <= GROW_TOL * tol
+        if on.all() or A[~on].sum() > TRIM_SHARE * A.sum():
+            continue
+        t = _kind_on(V, F, faces[on], tol, c.kind, W)
+        if t is not None and normals_agree(V, F, FN, faces[on], t):
+            return t
+    return s
+
+
+def _kind_on(V, F, faces, tol, kind, W) -> Surface | None:
+    """The fit of one kind to ``faces`` when it has enough samples and is within ``tol``."""
+    P, N, w = vertex_samples(V, F, faces, W)
+    if len(P) < PARAMS[kind] + MIN_EXTRA_SAMPLES[kind]:
+        return None
+    t = fit_surface(P, N, w, tol=tol, kinds=(kind,))
+    return t if t.is_analytic else None
 
 
 def normals_agree(V, F, FN, faces, s: Surface) -> bool:

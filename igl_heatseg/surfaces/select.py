@@ -125,7 +125,8 @@ def _clearly_better(s: Surface, simpler: Surface, tol: float) -> bool:
     return bool(by_rms or by_max)
 
 
-def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> Surface:
+def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS,
+                candidates: list | None = None) -> Surface:
     """The simplest adequate surface kind for one segment's samples.
 
     Kinds are tried simplest first (plane < cylinder < cone < sphere < torus). A candidate
@@ -156,6 +157,9 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
     kinds : sequence of str
         Kinds to consider (a single kind checks that kind only); ``freeform`` in it or not, the
         fallback is ``freeform``.
+    candidates : list, optional
+        When given, every analytic candidate fitted (whose normals agree) is appended to it, in
+        the order tried, whether chosen or not.
 
     Returns
     -------
@@ -191,6 +195,8 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS) -> 
         s = _FITTERS[kind](P, N, wn, **kw)
         if s is None or _normal_agreement(s, P, N, wn) < NORMAL_AGREEMENT:
             continue
+        if candidates is not None:
+            candidates.append(s)
         best = s if best is None or s.rms < best.rms else best
         if chosen is None or _clearly_better(s, chosen, tol):
             chosen = s

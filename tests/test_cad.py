@@ -173,8 +173,8 @@ def test_solid_of_a_closed_shell_stays_valid_when_shape_fix_breaks_it(monkeypatc
 
     monkeypatch.setattr(sew_mod, "ShapeFix_Solid", Broken)
     for sh in (shell, TopoDS.Shell(shell.Reversed())):
-        solid = sew_mod._solid(sh)
-        assert BRepCheck_Analyzer(solid).IsValid()
+        solid, valid = sew_mod._solid(sh)
+        assert valid and BRepCheck_Analyzer(solid).IsValid()
         assert volume(solid) == pytest.approx(6.0, rel=1e-9)
 
 
@@ -478,7 +478,8 @@ def test_face_read_back_out_of_place_is_named_by_its_vertices():
     V, F, labels = box_mesh(2)
     shape = build_brep(V, F, labels, box_planes()).shape
     faces = faces_of(shape)
-    assert roundtrip._stray_faces(shape, shape) == []
+    box = roundtrip._box(shape)
+    assert roundtrip._stray_faces(faces, shape, box) == []
 
     def corners(face):
         ex, out = TopExp_Explorer(face, TopAbs_VERTEX), []
@@ -498,7 +499,7 @@ def test_face_read_back_out_of_place_is_named_by_its_vertices():
     builder.MakeCompound(back)
     for f in [f for f in faces if not f.IsSame(top)] + [stray]:
         builder.Add(back, f)
-    out = roundtrip._stray_faces(shape, back)
+    out = roundtrip._stray_faces(faces, back, box)
     assert len(out) == 1 and out[0].IsSame(top)
 
 
@@ -696,13 +697,13 @@ def test_mesh_on_a_coarsely_meshed_face_gets_exact_distances(monkeypatch):
     """A face with loose edges is meshed at their tolerance, and its chords are no ruler: a
     mesh lying on the exact cylinder measures 1.6 fine deflections off them; the farthest
     mesh vertices are projected onto such faces instead, down to the fine deflection."""
-    from igl_heatseg.cad import fidelity
     from OCP.BRep import BRep_Builder
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS
 
+    from igl_heatseg.cad import fidelity
     from igl_heatseg.cad.fidelity import tessellate
 
     exact = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()

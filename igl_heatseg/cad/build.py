@@ -611,7 +611,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             t = time.perf_counter()
-            bad = _invalid_segments(shape, faces, owner, status, neighbours)
+            bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"])
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours)
@@ -665,14 +665,14 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
-def _invalid_segments(shape, faces, owner, status, neighbours=None):
+def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
-    (:func:`_invalid_faces`): a built segment's own face, or, for an invalid triangle of a
-    faceted segment, the built segments next to it (``neighbours``: segment -> set of adjacent
-    segments), whose edges it was sewn to. [] when the shape is valid; None when a face is to
-    blame that no built segment accounts for (a unified face, an isolated faceted patch, the
-    shell itself)."""
-    bad_faces = _invalid_faces(shape)
+    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known): a built segment's own
+    face, or, for an invalid triangle of a faceted segment, the built segments next to it
+    (``neighbours``: segment -> set of adjacent segments), whose edges it was sewn to. [] when
+    the shape is valid; None when a face is to blame that no built segment accounts for (a
+    unified face, an isolated faceted patch, the shell itself)."""
+    bad_faces = _invalid_faces(shape, valid)
     if not bad_faces:
         return bad_faces
     owners = _surface_owners(faces, owner)

@@ -44,7 +44,7 @@ from OCP.TopoDS import TopoDS  # noqa: E402
 logger = logging.getLogger(__name__)
 
 __all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
-           "tessellate", "tessellate_by_type", "face_type", "mesh_volume"]
+           "tessellate", "tessellate_by_type", "face_type", "mesh_volume", "shape_valid"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -399,6 +399,28 @@ def _bounds(face) -> np.ndarray:
     return np.array([[lo.X(), lo.Y(), lo.Z()], [hi.X(), hi.Y(), hi.Z()]])
 
 
+def shape_valid(shape) -> bool:
+    """BRepCheck of a whole shape, its sub-shapes checked on all cores (OCC's parallel mode:
+    1.8 -> 1.2 s on a sewn 15,341-face solid, 2 cores).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+
+    Returns
+    -------
+    bool
+        ``BRepCheck_Analyzer(shape).IsValid()``.
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> shape_valid(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())
+    True
+    """
+    return bool(BRepCheck_Analyzer(shape, True, True).IsValid())
+
+
 def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
     """Validity and distance of a B-Rep to the mesh it was built from.
 
@@ -439,7 +461,7 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
     F = np.asarray(F, dtype=np.int64)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     by_type, _ = _face_table(shape)
-    valid = bool(BRepCheck_Analyzer(shape).IsValid())  # before meshing (seen to change it)
+    valid = shape_valid(shape)  # before meshing (seen to change it)
     haus, rms, one_sided, missing, deflection = _distances(shape, V, F, diag)
     out = {
         "valid": valid,

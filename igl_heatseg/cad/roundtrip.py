@@ -25,7 +25,7 @@ from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-from .fidelity import face_area, faces_of  # noqa: E402
+from .fidelity import face_area, faces_of, shape_valid  # noqa: E402
 from .step import read_step, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -40,7 +40,7 @@ STRAY_BOX_REL = 0.05
 STRAY_AREA_FACTOR = 10.0
 
 
-def invalid_faces(shape) -> list | None:
+def invalid_faces(shape, valid: bool | None = None) -> list | None:
     """The faces of ``shape`` that fail BRepCheck in memory or, when it passes there, once
     written to STEP and read back (what a reader of ``model.step`` gets).
 
@@ -48,6 +48,8 @@ def invalid_faces(shape) -> list | None:
     ----------
     shape : TopoDS_Shape
         A sewn shell or solid.
+    valid : bool, optional
+        The shape's BRepCheck verdict when it is known already (that check is then skipped).
 
     Returns
     -------
@@ -63,17 +65,23 @@ def invalid_faces(shape) -> list | None:
     >>> invalid_faces(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())
     []
     """
-    if not BRepCheck_Analyzer(shape).IsValid():
-        return [f for f in faces_of(shape) if not BRepCheck_Analyzer(f).IsValid()] or None
+    if valid is None:
+        valid = shape_valid(shape)
+    if not valid:
+        checked = BRepCheck_Analyzer(shape, True, True)
+        return [f for f in faces_of(shape) if not checked.IsValid(f)] or None
+    box = _box(shape)
     with tempfile.TemporaryDirectory() as tmp:
         back = read_step(write_step(shape, Path(tmp) / "check.step"))
-    if BRepCheck_Analyzer(back).IsValid():
-        return _stray_faces(shape, back)
+    mine = faces_of(shape)
+    if shape_valid(back):
+        return _stray_faces(mine, back, box)
     # the reader may split a face (so not the order): each named by its shared vertices, or
     # by its place when it shares none and no face was split (a face without vertices)
-    mine, theirs = faces_of(shape), faces_of(back)
-    bad = [j for j, g in enumerate(theirs) if not BRepCheck_Analyzer(g).IsValid()]
-    origin = _origins(mine, [theirs[j] for j in bad], _diagonal(_box(shape)))
+    theirs = faces_of(back)
+    checked = BRepCheck_Analyzer(back, True, True)
+    bad = [j for j, g in enumerate(theirs) if not checked.IsValid(g)]
+    origin = _origins(mine, [theirs[j] for j in bad], _diagonal(box))
     same = len(mine) == len(theirs)
     named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,
                                                                           strict=True)]
@@ -127,15 +135,15 @@ def _vertex_keys(face, scale: float) -> set:
     return out
 
 
-def _stray_faces(shape, back) -> list:
-    """Faces of ``shape`` whose STEP read-back (in ``back``) is valid but wrong: a face that
-    comes back with more than STRAY_AREA_FACTOR times the area of the face it came from (the
-    face of ``shape`` sharing most of its vertices), or reaching out of the model's box by
-    more than STRAY_BOX_REL of its diagonal.  A sewn triangle whose edge was split at a
-    neighbour's vertex came back as a 73 mm^2 face (from 0.6) whose tessellation spans 3x the
-    part, and BRepCheck passed it.  [] when every face came back in place."""
-    mine, theirs = faces_of(shape), faces_of(back)
-    box = _box(shape)
+def _stray_faces(mine: list, back, box: np.ndarray) -> list:
+    """Faces of ``mine`` (the faces written) whose STEP read-back (in ``back``) is valid but
+    wrong: a face that comes back with more than STRAY_AREA_FACTOR times the area of the face
+    it came from (the face of ``mine`` sharing most of its vertices), or reaching out of the
+    model's box (``box``, (2, 3): lowest and highest corner) by more than STRAY_BOX_REL of
+    its diagonal.  A sewn triangle whose edge was split at a neighbour's vertex came back as a
+    73 mm^2 face (from 0.6) whose tessellation spans 3x the part, and BRepCheck passed it.
+    [] when every face came back in place."""
+    theirs = faces_of(back)
     diag = _diagonal(box)
     slack = STRAY_BOX_REL * diag
     areas: dict = {}  # of the faces of ``mine`` read back, each computed once

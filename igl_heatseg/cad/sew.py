@@ -10,7 +10,6 @@ require_ocp()
 
 from OCP.BRep import BRep_Builder  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing  # noqa: E402
-from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepGProp import BRepGProp  # noqa: E402
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
@@ -19,7 +18,7 @@ from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
 
-from .fidelity import count_free_edges, faces_of  # noqa: E402
+from .fidelity import count_free_edges, faces_of, shape_valid  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
@@ -58,34 +57,42 @@ def _compound(shapes):
 
 
 def _unify(shape):
-    """Merge faces on the same surface (and edges on the same curve); keep input on failure."""
+    """Merge faces on the same surface (and edges on the same curve); keep input on failure.
+    Returns (shape, valid): its BRepCheck verdict, None when not checked."""
     try:
         uni = ShapeUpgrade_UnifySameDomain(shape, True, True, False)
         uni.Build()
         out = uni.Shape()
-        if BRepCheck_Analyzer(out).IsValid() or not BRepCheck_Analyzer(shape).IsValid():
-            return out
+        if shape_valid(out):
+            return out, True
+        if not shape_valid(shape):
+            return out, False
+        return shape, True
     except Exception as exc:  # OCC raises Standard_Failure subclasses
         logger.warning("UnifySameDomain failed (%s); keeping the sewn faces", exc)
-    return shape
+    return shape, None
 
 
 def _solid(shell):
-    """A valid solid from a closed shell, outward oriented, or None."""
+    """A solid from a closed shell, outward oriented (by the sign of its volume), and whether
+    it is valid; (None, False) when none is made."""
     mk = BRepBuilderAPI_MakeSolid(shell)
     if not mk.IsDone():
-        return None
-    raw = mk.Solid()
-    fix = ShapeFix_Solid(raw)
-    fix.Perform()
-    solid = fix.Solid()
-    if not BRepCheck_Analyzer(solid).IsValid() and BRepCheck_Analyzer(raw).IsValid():
-        solid = raw  # the fix made an invalid solid of a valid one (a 17k-face shell)
+        return None, False
+    solid = mk.Solid()
+    valid = shape_valid(solid)
+    if not valid:
+        # ShapeFix_Solid only when needed: 3 s on a 15k-face shell, and it has made an
+        # invalid solid of a valid one (a 17k-face shell)
+        fix = ShapeFix_Solid(solid)
+        fix.Perform()
+        solid = fix.Solid()
+        valid = shape_valid(solid)
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(solid, props)
     if props.Mass() < 0:
         solid.Reverse()
-    return solid
+    return solid, valid
 
 
 def _sew(faces, tol: float, unify: bool):
@@ -97,7 +104,7 @@ def _sew(faces, tol: float, unify: bool):
     fix.SetPrecision(tol * 1e-2)
     fix.SetMaxTolerance(tol)
     fix.Perform()
-    return _unify(fix.Shape()) if unify else fix.Shape()
+    return _unify(fix.Shape()) if unify else (fix.Shape(), None)
 
 
 def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True,
@@ -123,27 +130,31 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True,
         A solid (a compound of solids for several closed shells), a shell, or the sewn
         compound.
     info : dict
-        ``free_edges_after_sewing``, ``solid`` (bool), ``sew_tol`` (the tolerance used).
+        ``free_edges_after_sewing``, ``solid`` (bool), ``sew_tol`` (the tolerance used),
+        ``valid`` (the shape's BRepCheck verdict, None when it was not checked as returned).
     """
     for factor in RETRY_FACTORS:
         tol = float(sew_tol) * factor
         if max_tol is not None:
             tol = max(min(tol, float(max_tol)), float(sew_tol))
-        shape = _sew(faces, tol, unify)
+        shape, valid = _sew(faces, tol, unify)
         free = count_free_edges(shape)
         if free == 0 or not closed or max_tol is None or tol >= max_tol:
             break
         logger.info("sewing at %.3g left %d free edges; retrying wider", tol, free)
-    info = {"free_edges_after_sewing": free, "solid": False, "sew_tol": tol}
+    info = {"free_edges_after_sewing": free, "solid": False, "sew_tol": tol, "valid": valid}
     shells = _shells(shape)
     if not shells:  # sewing one face returns the face
         shells = [_shell_of(faces_of(shape))]
     if closed and info["free_edges_after_sewing"] == 0:
         solids = [_solid(sh) for sh in shells]  # several shells: one solid per component
-        if all(so is not None and BRepCheck_Analyzer(so).IsValid() for so in solids):
-            info["solid"] = True
+        if all(so is not None and ok for so, ok in solids):
+            info["solid"] = info["valid"] = True
+            solids = [so for so, _ in solids]
             return (solids[0] if len(solids) == 1 else _compound(solids)), info
         logger.warning("closed shell did not make a valid solid; returning the shell")
     if len(shells) == 1:
+        if not shells[0].IsSame(shape):
+            info["valid"] = None
         return shells[0], info
     return shape, info

@@ -191,8 +191,9 @@ def sampled_distance(shape, V, F) -> float:
 
 #: Version of :func:`score`'s measurement; ``--rescore`` scores again the cached results scored
 #: by an older one (2: mesh vertices near faces meshed at their loose edges' tolerance get
-#: distances to the exact surface, not to its chords).
-SCORE_VERSION = 2
+#: distances to the exact surface, not to its chords; 3: also near faces whose tessellation
+#: falls short of their area, where OCC's mesher left a hole).
+SCORE_VERSION = 3
 
 
 def score(step: Path, obj: str, clean: str | None = None) -> dict:

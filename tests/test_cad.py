@@ -875,3 +875,29 @@ def test_bspline_face_far_from_the_mesh_is_faceted(monkeypatch):
     assert [f["index"] for f in res.not_built] == [2]
     assert "from the mesh" in res.faces[2]["reason"]  # 4 from the cube's top: tol is 0.035
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
+def test_vertices_on_a_hole_of_a_face_tessellation_get_projected():
+    """OCC's mesher can leave part of a B-spline face untriangulated (56 of 700 mm^2 on a
+    tuning plate): mesh vertices lying on the face then measure far from its triangles. A
+    face whose triangles fall short of its area is projected onto, like a coarse one."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    from igl_heatseg.cad import fidelity
+
+    box = BRepPrimAPI_MakeBox(2.0, 2.0, 2.0).Shape()
+    meshed = fidelity._mesh_each(box, 0.01)
+    TV, TF, tri_face, _ = fidelity._triangles_and_missing(box, 0.01)
+    areas = [fidelity.face_area(f) for f in fidelity.faces_of(box)]
+    centre = fidelity.face_points(meshed[0][0], 0.01).mean(axis=0)
+    keep = tri_face != 0  # face 0 lost its triangles
+    short = fidelity._short_faces(TV, TF[keep], tri_face[keep], areas)
+    assert short.tolist() == [True] + [False] * 5
+    d2, nearest, _ = igl.point_mesh_squared_distance(centre[None], TV, TF[keep])
+    d = np.sqrt(d2)
+    assert d[0] > 0.9  # to the neighbouring faces' triangles
+    coarse = np.zeros(6, dtype=bool)
+    face_of = tri_face[keep][nearest]
+    assert fidelity._projected_distances(centre[None], d, face_of, meshed, coarse, 1e-3)[0] > 0.9
+    out = fidelity._projected_distances(centre[None], d, face_of, meshed, coarse, 1e-3, short)
+    assert out[0] < 1e-9

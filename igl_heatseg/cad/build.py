@@ -504,7 +504,8 @@ def _is_closed(F) -> bool:
 def _faceted_result(V, F, ctx, closed, timings, message):
     t = time.perf_counter()
     faces = faceted.triangle_faces(V, F, ctx["vertex_tol"])
-    shape, _ = assemble(faces, max(ctx["vertex_tol"], 1e-6 * ctx["diag"]), closed, unify=False)
+    shape, _ = assemble(faces, max(ctx["vertex_tol"], 1e-6 * ctx["diag"]), closed, unify=False,
+                        connected=True)
     timings["faceted"] = time.perf_counter() - t
     return shape
 

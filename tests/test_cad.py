@@ -456,6 +456,15 @@ def test_connected_triangles_of_a_closed_mesh_make_a_solid_without_sewing(monkey
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
     shape, info = sew_mod.assemble(faces[1:], 1e-6, closed=True, unify=False, connected=True)
     assert len(calls) >= 1 and not info["solid"] and info["free_edges_after_sewing"] == 3
+    # two separate boxes: one shell of both makes no valid solid, so they are sewn (two
+    # solids)
+    calls.clear()
+    V2, F2 = np.r_[V, V + [5.0, 0.0, 0.0]], np.r_[F, F + len(V)]
+    shape, info = sew_mod.assemble(faceted.triangle_faces(V2, F2, 1e-7), 1e-6, closed=True,
+                                   unify=False, connected=True)
+    fid = brep_fidelity(shape, V2, F2)
+    assert len(calls) >= 1 and fid["valid"] and fid["solids"] == 2
+    assert fid["volume"] == pytest.approx(16.0, rel=1e-9)
 
 
 def test_one_segment_failing_to_fit_facets_only_that_segment(monkeypatch):

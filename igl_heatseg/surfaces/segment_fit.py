@@ -152,25 +152,17 @@ def _simpler_on_most(V, F, faces, tol, s: Surface, tried: list, W, FN) -> Surfac
     round end lie on one sphere, and an exact tessellation's tolerance then takes it over the
     plane those facets leave by 0.2 units: the sphere bulges 1.8 units between the wall's
     vertices. A curved fit is kept only when no simpler candidate (``tried``, fitted to the
-    same samples) explains the segment without a few faces: one least-trimmed-squares step as
-    in :func:`_trimmed_fit` (the faces farthest from the candidate, TRIM_SHARE of the area,
-    left out and the kind refitted), then every face within GROW_TOL x tol of the refit but
-    at most TRIM_SHARE of the area, the refit on them within tolerance with agreeing normals.
-    The faces left out are handed to the neighbour they lie on by the boundary moves."""
+    same samples) explains the segment without a few faces (:func:`_faces_on_trimmed`), its
+    refit on the rest within tolerance with agreeing normals. The faces left out are handed
+    to the neighbour they lie on by the boundary moves."""
     rank = SURFACE_KINDS.index
-    simpler = [c for c in tried if rank(c.kind) < rank(s.kind)]
-    if not simpler:
-        return s
-    A = face_areas(V, F[faces])
-    for c in simpler:
-        order = np.argsort(corner_max_dev(V, F, faces, c), kind="stable")
-        keep = np.zeros(len(faces), dtype=bool)
-        keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
-        t = _kind_on(V, F, faces[keep], tol, c.kind, W)
-        if t is None:
-            continue
-        on = corner_max_dev(V, F, faces, t) <= GROW_TOL * tol
-        if on.all() or A[~on].sum() > TRIM_SHARE * A.sum():
+    for c in (c for c in tried if rank(c.kind) < rank(s.kind)):
+
+        def refit(sub, kind=c.kind):
+            return _kind_on(V, F, sub, tol, kind, W)
+
+        on = _faces_on_trimmed(V, F, faces, tol, c, refit)
+        if on is None or on.all():
             continue
         t = _kind_on(V, F, faces[on], tol, c.kind, W)
         if t is not None and normals_agree(V, F, FN, faces[on], t):
@@ -185,6 +177,25 @@ def _kind_on(V, F, faces, tol, kind, W) -> Surface | None:
         return None
     t = fit_surface(P, N, w, tol=tol, kinds=(kind,))
     return t if t.is_analytic else None
+
+
+def _faces_on_trimmed(V, F, faces, tol, start: Surface, refit, min_kept: int = 0):
+    """One least-trimmed-squares step from ``start``: the faces farthest from it, TRIM_SHARE of
+    the area, left out and ``refit(kept faces) -> Surface or None`` fitted to the rest; then
+    the faces within GROW_TOL x tol of that fit, as a mask over ``faces``, when they leave out
+    at most TRIM_SHARE of the area (else, or when fewer than ``min_kept`` faces were kept or
+    the refit failed, None)."""
+    A = face_areas(V, F[faces])
+    order = np.argsort(corner_max_dev(V, F, faces, start), kind="stable")
+    keep = np.zeros(len(faces), dtype=bool)
+    keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
+    if keep.sum() < min_kept:
+        return None
+    s = refit(faces[keep])
+    if s is None:
+        return None
+    on = corner_max_dev(V, F, faces, s) <= GROW_TOL * tol
+    return None if A[~on].sum() > TRIM_SHARE * A.sum() else on
 
 
 def normals_agree(V, F, FN, faces, s: Surface) -> bool:
@@ -229,26 +240,14 @@ def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface 
     loose = fit_surface(P, N, w, tol=max(tol, free.max_dev / 2.9), kinds=kinds)
     if not loose.is_analytic:
         return None
-    A = face_areas(V, F[faces])
-    # one least-trimmed-squares step: the stray faces tilt the loose fit, so rank the faces by
-    # their distance to it, refit without the worst TRIM_SHARE of the area, then check
-    d = corner_max_dev(V, F, faces, loose)
-    order = np.argsort(d, kind="stable")
-    keep = np.zeros(len(faces), dtype=bool)
-    keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
-    if keep.sum() < 2 * MIN_REGION_FACES:
-        return None
-    P, N, w = vertex_samples(V, F, faces[keep], W)
-    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
-    if not s.is_analytic:
-        return None
-    d = corner_max_dev(V, F, faces, s)
-    on = d <= GROW_TOL * tol
-    if A[~on].sum() > TRIM_SHARE * A.sum():
-        return None
-    P, N, w = vertex_samples(V, F, faces[on], W)
-    s = fit_surface(P, N, w, tol=tol, kinds=kinds)
-    return s if s.is_analytic else None
+
+    def refit(sub):
+        s = fit_surface(*vertex_samples(V, F, sub, W), tol=tol, kinds=kinds)
+        return s if s.is_analytic else None
+
+    # the stray faces tilt the loose fit: one least-trimmed-squares step from it
+    on = _faces_on_trimmed(V, F, faces, tol, loose, refit, min_kept=2 * MIN_REGION_FACES)
+    return None if on is None else refit(faces[on])
 
 
 def rms_to(V, F, faces, s: Surface) -> float:

@@ -44,7 +44,8 @@ from OCP.TopoDS import TopoDS  # noqa: E402
 logger = logging.getLogger(__name__)
 
 __all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
-           "tessellate", "tessellate_by_type", "face_type", "mesh_volume", "shape_valid"]
+           "tessellate", "tessellate_by_type", "face_type", "mesh_volume", "shape_analysis",
+           "shape_valid"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -362,18 +363,15 @@ def _projected_distances(V, d, face_of, meshed, coarse, floor: float,
     to the surface of their nearest face (``face_of`` (n,), into ``meshed``) where that face was
     meshed coarsely (``coarse``), and of every face marked ``short`` (its triangles short of
     its area) whose box is within the vertex's distance, where the projection falls inside
-    it: the farthest vertices first, until the next one's distance (or ``floor``) cannot
-    raise the maximum (at most PROJECTED_DISTANCE_MAX vertices)."""
-    d = d.copy()
-    top, cache = 0.0, {}
+    it: the farthest vertices first (:func:`_farthest_first`, at most PROJECTED_DISTANCE_MAX
+    of them)."""
+    cache: dict = {}
     holed = np.flatnonzero(short) if short is not None else np.zeros(0, dtype=np.int64)
     boxes = np.array([_bounds(meshed[k][0]) for k in holed]).reshape(-1, 2, 3)
-    for i in np.argsort(d)[::-1][:PROJECTED_DISTANCE_MAX]:
-        if d[i] <= max(floor, top):
-            break
-        own = int(face_of[i])
-        near = holed[np.all((V[i] >= boxes[:, 0] - d[i]) & (V[i] <= boxes[:, 1] + d[i]),
-                            axis=1)]
+
+    def closer(i: int, r: float) -> float:
+        own, best = int(face_of[i]), math.inf
+        near = holed[_boxes_near(boxes, V[i], r)]
         for k in ([own] if coarse[own] else []) + [j for j in near.tolist() if j != own]:
             if k not in cache:
                 face = meshed[k][0]
@@ -385,35 +383,52 @@ def _projected_distances(V, d, face_of, meshed, coarse, floor: float,
             if proj.NbPoints():
                 u, v = proj.LowerDistanceParameters()
                 if inside.Perform(gp_Pnt2d(u, v)) in (TopAbs_IN, TopAbs_ON):
-                    d[i] = min(d[i], proj.LowerDistance())
-        top = max(top, d[i])
-    return d
+                    best = min(best, proj.LowerDistance())
+        return best
+
+    return _farthest_first(d, PROJECTED_DISTANCE_MAX, floor, closer)
 
 
 def _exact_distances(V, d, faces, floor: float) -> np.ndarray:
     """Distances ``d`` (n,) of the vertices ``V`` to a tessellation, where the exact distance
     (BRepExtrema) to one of ``faces`` (left untessellated) is smaller: the vertices farthest
-    by the tessellation first, each against the faces whose bounding box is within its
-    distance, until the next one's distance (or ``floor``) cannot raise the maximum (at most
-    EXACT_DISTANCE_MAX vertices: against the whole shape, 2000 queries on a 5898-face B-Rep
-    took 150 s)."""
+    by the tessellation first (:func:`_farthest_first`), each against the faces whose
+    bounding box is within its distance (at most EXACT_DISTANCE_MAX vertices: against the
+    whole shape, 2000 queries on a 5898-face B-Rep took 150 s)."""
     boxes = np.array([_bounds(f) for f in faces])
-    d = d.copy()
-    top = 0.0
-    for i in np.argsort(d)[::-1][:EXACT_DISTANCE_MAX]:
-        r = d[i]
-        if r <= max(floor, top):
-            break
-        near = np.flatnonzero(np.all((V[i] >= boxes[:, 0] - r) & (V[i] <= boxes[:, 1] + r),
-                                     axis=1))
+
+    def closer(i: int, r: float) -> float:
+        best = math.inf
+        near = _boxes_near(boxes, V[i], r)
         if len(near):
             vertex = BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, V[i]))).Vertex()
             for j in near.tolist():
                 dist = BRepExtrema_DistShapeShape(vertex, faces[j])
                 if dist.IsDone():
-                    d[i] = min(d[i], dist.Value())
+                    best = min(best, dist.Value())
+        return best
+
+    return _farthest_first(d, EXACT_DISTANCE_MAX, floor, closer)
+
+
+def _farthest_first(d: np.ndarray, limit: int, floor: float, closer) -> np.ndarray:
+    """``d`` (n,) with ``d[i]`` lowered to ``closer(i, d[i])`` (a distance, inf for none) for
+    the largest distances first, until the next one (or ``floor``) cannot raise the maximum:
+    at most ``limit`` of them."""
+    d = d.copy()
+    top = 0.0
+    for i in np.argsort(d)[::-1][:limit]:
+        if d[i] <= max(floor, top):
+            break
+        d[i] = min(d[i], closer(int(i), float(d[i])))
         top = max(top, d[i])
     return d
+
+
+def _boxes_near(boxes: np.ndarray, p: np.ndarray, r: float) -> np.ndarray:
+    """Indices of the boxes ``(b, 2, 3)`` (lowest and highest corner) within ``r`` of ``p``
+    along every axis."""
+    return np.flatnonzero(np.all((p >= boxes[:, 0] - r) & (p <= boxes[:, 1] + r), axis=1))
 
 
 def _bounds(face) -> np.ndarray:
@@ -423,7 +438,7 @@ def _bounds(face) -> np.ndarray:
     return np.array([[lo.X(), lo.Y(), lo.Z()], [hi.X(), hi.Y(), hi.Z()]])
 
 
-def shape_valid(shape) -> bool:
+def shape_analysis(shape):
     """BRepCheck of a whole shape, its sub-shapes checked on all cores (OCC's parallel mode:
     1.8 -> 1.2 s on a sewn 15,341-face solid, 2 cores).
 
@@ -433,8 +448,30 @@ def shape_valid(shape) -> bool:
 
     Returns
     -------
+    BRepCheck_Analyzer
+        ``IsValid()`` for the shape, ``IsValid(sub)`` for one of its faces, edges, ...
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()
+    >>> checked = shape_analysis(box)
+    >>> checked.IsValid(), all(checked.IsValid(f) for f in faces_of(box))
+    (True, True)
+    """
+    return BRepCheck_Analyzer(shape, True, True)
+
+
+def shape_valid(shape) -> bool:
+    """Whether a whole shape passes BRepCheck (:func:`shape_analysis`).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+
+    Returns
+    -------
     bool
-        ``BRepCheck_Analyzer(shape).IsValid()``.
 
     Examples
     --------
@@ -442,7 +479,7 @@ def shape_valid(shape) -> bool:
     >>> shape_valid(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())
     True
     """
-    return bool(BRepCheck_Analyzer(shape, True, True).IsValid())
+    return bool(shape_analysis(shape).IsValid())
 
 
 def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:

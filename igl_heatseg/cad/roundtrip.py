@@ -20,12 +20,11 @@ require_ocp()
 from OCP.Bnd import Bnd_Box  # noqa: E402
 from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
-from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-from .fidelity import face_area, faces_of, shape_valid  # noqa: E402
+from .fidelity import face_area, faces_of, shape_analysis  # noqa: E402
 from .step import read_step, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -49,7 +48,8 @@ def invalid_faces(shape, valid: bool | None = None) -> list | None:
     shape : TopoDS_Shape
         A sewn shell or solid.
     valid : bool, optional
-        The shape's BRepCheck verdict when it is known already (that check is then skipped).
+        The shape's BRepCheck verdict when it is known already: True skips the in-memory
+        check (False still needs it, to name the invalid faces).
 
     Returns
     -------
@@ -65,21 +65,20 @@ def invalid_faces(shape, valid: bool | None = None) -> list | None:
     >>> invalid_faces(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape())
     []
     """
-    if valid is None:
-        valid = shape_valid(shape)
-    if not valid:
-        checked = BRepCheck_Analyzer(shape, True, True)
-        return [f for f in faces_of(shape) if not checked.IsValid(f)] or None
+    if valid is not True:  # one analysis answers for the shape and names its faces
+        checked = shape_analysis(shape)
+        if not checked.IsValid():
+            return [f for f in faces_of(shape) if not checked.IsValid(f)] or None
     box = _box(shape)
     with tempfile.TemporaryDirectory() as tmp:
         back = read_step(write_step(shape, Path(tmp) / "check.step"))
     mine = faces_of(shape)
-    if shape_valid(back):
+    checked = shape_analysis(back)
+    if checked.IsValid():
         return _stray_faces(mine, back, box)
     # the reader may split a face (so not the order): each named by its shared vertices, or
     # by its place when it shares none and no face was split (a face without vertices)
     theirs = faces_of(back)
-    checked = BRepCheck_Analyzer(back, True, True)
     bad = [j for j, g in enumerate(theirs) if not checked.IsValid(g)]
     origin = _origins(mine, [theirs[j] for j in bad], _diagonal(box))
     same = len(mine) == len(theirs)

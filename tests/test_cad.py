@@ -486,6 +486,35 @@ def test_one_segment_failing_to_fit_facets_only_that_segment(monkeypatch):
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
 
 
+def test_a_model_of_two_parts_that_stays_invalid_is_built_part_by_part(monkeypatch):
+    """Two boxes: when the model as a whole stays invalid (forced here), each box is built on
+    its own into one compound, and keeps its six planes instead of being faceted."""
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(2)
+    V2, F2 = np.r_[V, V + [5.0, 0.0, 0.0]], np.r_[F, F + len(V)]
+    moved = [Surface("plane", {"point": s.params["point"] + [5.0, 0, 0],
+                               "normal": s.params["normal"]}) for s in box_planes()]
+    real = build_mod._sewn_model
+
+    def whole_fails(V, F, *args, **kwargs):
+        out = real(V, F, *args, **kwargs)
+        return (out[0], out[1], out[2], True, "forced", False) if len(F) == len(F2) else out
+
+    monkeypatch.setattr(build_mod, "_sewn_model", whole_fails)
+    res = build_brep(V2, F2, np.r_[labels, labels + 6], box_planes() + moved)
+    assert not res.faceted_model and "part by part" in res.message
+    assert [(f["index"], f["status"]) for f in res.faces] == [(a, "built") for a in range(12)]
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 2 and fid["faces"] == 12
+    assert fid["volume"] == pytest.approx(16.0, rel=1e-9)
+    # a mesh of one part that stays invalid: the faceted model, as before
+    monkeypatch.setattr(build_mod, "_sewn_model", lambda V, F, *a, **k: (
+        *real(V, F, *a, **k)[:3], True, "forced", False))
+    res = build_brep(V, F, labels, box_planes())
+    assert res.faceted_model and res.message == "forced"
+
+
 def test_disk_chart_refuses_two_fans_sharing_a_vertex():
     from igl_heatseg.cad.freeform import disk_chart
 

@@ -150,3 +150,34 @@ def test_summary_counts_faceted_segments_and_bspline_stand_ins():
     assert cad_summary(cad) == (
         "B-Rep: valid solid, 9 faces from 3 segments (1 faceted, 1 analytic as B-splines), "
         "0 free edges, Hausdorff 0.40 % of the diagonal, volume error 0.10 %")
+
+
+def test_summary_names_a_compound_of_parts():
+    from igl_heatseg.cli.cad import cad_summary
+
+    def line(solids, shells):
+        fid = {"solids": solids, "shells": shells, "valid": True, "faces": 9, "free_edges": 0,
+               "hausdorff_rel": 0.001}
+        return cad_summary({"fidelity": fid, "segments": 9, "faces": [], "not_built": []})
+
+    assert line(1, 1).startswith("B-Rep: valid solid, 9 faces")
+    assert line(0, 1).startswith("B-Rep: valid shell, 9 faces")
+    assert line(2, 2).startswith("B-Rep: valid solid x 2, 9 faces")
+    assert line(6, 64).startswith("B-Rep: valid shell x 64 (6 of them closed solids), 9 faces")
+
+
+def test_no_volume_for_a_solid_beside_an_open_shell():
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.TopoDS import TopoDS_Compound
+
+    V, F = cube()
+    solid = BRepPrimAPI_MakeBox(2.0, 2.0, 2.0).Shape()
+    assert brep_fidelity(solid, V, F)["volume"] is not None
+    builder, both = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(both)
+    builder.Add(both, solid)
+    builder.Add(both, faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[0])
+    fid = brep_fidelity(both, V, F)
+    assert fid["solids"] == 1 and fid["free_edges"] > 0
+    assert fid["volume"] is None and fid["volume_rel_error"] is None

@@ -127,7 +127,8 @@ class CadResult:
     tolerances : dict
         The modelling, curve and sewing tolerances used.
     faceted_model : bool
-        True when the whole build failed and ``shape`` is the fully faceted mesh.
+        True when the whole build failed and ``shape`` is the fully faceted mesh (of a mesh of
+        several parts: every part faceted).
     """
 
     shape: object
@@ -541,7 +542,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         faceted and the model rebuilt (up to MAX_REBUILDS times), as are the built segments
         along the free edges of a closed mesh's open shell (kept when that gives a valid solid,
         else the first open shell is returned); a failed build, or a model still invalid,
-        returns the fully faceted model (``faceted_model=True``).
+        returns the fully faceted model (``faceted_model=True``), unless the mesh has several
+        edge-connected parts: they are then built one by one
+        (:func:`~igl_heatseg.cad.components.build_by_component`; a compound).
 
     Raises
     ------
@@ -585,11 +588,18 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
         if (not again[3], again[5]) > (not faceted_model, solid):
             shape, status, sew_tol, faceted_model, message, solid = again
+    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
+    if faceted_model:  # a part of the mesh that no rebuild mends need not facet the others
+        from .components import build_by_component
+
+        parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], progress)
+        if parts is not None and not parts.faceted_model:
+            parts.timings, parts.tolerances = {**timings, **parts.timings}, tols
+            return parts
     t = time.perf_counter()
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)
     timings["fidelity"] = time.perf_counter() - t
-    tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
     return CadResult(shape, status, fid, timings, tols, faceted_model, message)

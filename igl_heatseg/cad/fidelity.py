@@ -506,7 +506,8 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         ``measurement_deflection`` (tessellation error bound of the distances: the largest
         deflection used, :func:`mesh_faces`),
         ``faces_not_tessellated`` (the B-Rep-to-mesh direction misses them), ``volume``,
-        ``mesh_volume`` and ``volume_rel_error`` (closed shapes only, else None).
+        ``mesh_volume`` and ``volume_rel_error`` (closed shapes only: a solid and no free
+        edge, else None).
 
     Examples
     --------
@@ -544,7 +545,7 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         "mesh_volume": None,
         "volume_rel_error": None,
     }
-    if out["solids"] > 0:
+    if out["solids"] > 0 and out["free_edges"] == 0:  # closed: no open shell beside a solid
         props = GProp_GProps()
         BRepGProp.VolumeProperties_s(shape, props)
         vm = mesh_volume(V, F)

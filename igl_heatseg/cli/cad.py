@@ -22,7 +22,11 @@ __all__ = ["register", "cad_summary"]
 def cad_summary(cad: dict) -> str:
     """One line about a report's ``cad`` section: what was built and how close it is."""
     fid = cad.get("fidelity", {})
-    kind = "solid" if fid.get("solids") else "shell"
+    solids, shells = fid.get("solids") or 0, fid.get("shells") or 0
+    if shells <= 1 or solids == shells:
+        kind = ("solid" if solids else "shell") + (f" x {shells}" if shells > 1 else "")
+    else:
+        kind = f"shell x {shells}" + (f" ({solids} of them closed solids)" if solids else "")
     valid = "valid" if fid.get("valid") else "INVALID"
     vol = fid.get("volume_rel_error")
     vol_txt = f", volume error {100 * vol:.2f} %" if vol is not None else ""

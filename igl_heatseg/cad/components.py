@@ -1,0 +1,110 @@
+"""A mesh of several connected parts built one part at a time: the fallback of
+:func:`~igl_heatseg.cad.build.build_brep` when the model as a whole stays invalid.
+
+The parts of a multi-part mesh (a truck's 64 shells) share no edge, so a face that no rebuild
+mends in one part need not cost the others their surfaces: each part is built on its own (and,
+failing, faceted on its own), and the results are put in one compound.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..mesh.topology import face_components
+from ._ocp import require_ocp
+
+require_ocp()
+
+from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.TopoDS import TopoDS_Compound  # noqa: E402
+
+from .fidelity import brep_fidelity  # noqa: E402
+
+__all__ = ["build_by_component"]
+
+
+def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
+    """Build each edge-connected part of a mesh on its own and put the results in one compound.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment of each face, ``0..k-1``; a segment spread over several parts is built in each.
+    surfaces : list of Surface, length k
+    uv : list of (ids (p,), UV (p, 2)) or None
+        Charts by segment (vertex ids into ``V``), as :func:`~.build.build_brep` takes them; a
+        segment spread over several parts has its chart made anew in each.
+    tol : float
+        The modelling tolerance of the whole mesh (model units).
+    progress : callable(stage, fraction), optional
+
+    Returns
+    -------
+    CadResult or None
+        None for a mesh of one part. Otherwise ``faces`` has one entry per segment, faceted
+        when any of its parts was; ``faceted_model`` is True only when every part was faceted
+        whole; ``fidelity`` is of the compound against the whole mesh.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [5, 0, 0], [6, 0, 0], [5, 1, 0]])
+    >>> F = np.array([[0, 1, 2], [3, 4, 5]])
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> res = build_by_component(V, F, np.array([0, 0]), [z], None, 0.01)
+    >>> res.fidelity["faces"], [f["status"] for f in res.faces]
+    (2, ['built'])
+    """
+    from .build import CadResult, build_brep  # the caller's module, loaded by now
+
+    count, comp = face_components(F)
+    if count < 2:
+        return None
+    t0 = time.perf_counter()
+    progress = progress or (lambda stage, frac: None)
+    builder, compound = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(compound)
+    faceted: dict = {}
+    status = [None] * len(surfaces)
+    whole = 0
+    for c in range(count):
+        progress("components", c / count)
+        faces = np.flatnonzero(comp == c)
+        verts, Fl = np.unique(F[faces], return_inverse=True)
+        segs, lab = np.unique(labels[faces], return_inverse=True)
+        res = build_brep(V[verts], Fl.reshape(-1, 3), lab, [surfaces[a] for a in segs],
+                         uv=_charts(uv, segs, verts, labels, comp, c), tol=tol)
+        builder.Add(compound, res.shape)
+        whole += bool(res.faceted_model)
+        for entry, a in zip(res.faces, segs.tolist(), strict=True):
+            if status[a] is None or entry["status"] != "built":
+                status[a] = dict(entry, index=a)
+            if entry["status"] != "built":
+                faceted[a] = True
+    progress("components", 1.0)
+    fid = brep_fidelity(compound, V, F)
+    message = (f"the model as a whole stayed invalid; built part by part: {whole} of {count} "
+               f"parts fully faceted, {len(faceted)} of {len(surfaces)} segments faceted")
+    return CadResult(compound, status, fid, {"components": time.perf_counter() - t0},
+                     {"tol": float(tol)}, whole == count, message)
+
+
+def _charts(uv, segs, verts, labels, comp, c):
+    """The charts of the segments ``segs`` of part ``c``, their vertex ids renumbered into the
+    part's ``verts``; None for a segment that reaches into another part."""
+    if uv is None:
+        return None
+    out = []
+    for a in segs.tolist():
+        entry = uv[a]
+        if entry is None or np.any(comp[labels == a] != c):
+            out.append(None)
+            continue
+        ids, UV = (np.asarray(x) for x in entry)
+        out.append((np.searchsorted(verts, ids), UV))
+    return out

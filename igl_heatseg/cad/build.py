@@ -594,7 +594,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
 
         parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], progress)
         if parts is not None and not parts.faceted_model:
-            parts.timings, parts.tolerances = {**timings, **parts.timings}, tols
+            parts.timings = {**timings, **parts.timings}
+            parts.tolerances = {**tols, "sew_tol": None}  # (each part sewn with its own)
             return parts
     t = time.perf_counter()
     progress("fidelity", 0.0)

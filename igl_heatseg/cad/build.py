@@ -42,6 +42,7 @@ from . import faceted, freeform, geometry, periodic  # noqa: E402
 from .blame import blame as _blame  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
+from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
@@ -590,13 +591,11 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             shape, status, sew_tol, faceted_model, message, solid = again
     tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
     if faceted_model:  # a part of the mesh that no rebuild mends need not facet the others
-        from .components import build_by_component
-
-        parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], progress)
-        if parts is not None and not parts.faceted_model:
-            parts.timings = {**timings, **parts.timings}
-            parts.tolerances = {**tols, "sew_tol": None}  # (each part sewn with its own)
-            return parts
+        t = time.perf_counter()
+        parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], build_brep, progress)
+        timings["components"] = time.perf_counter() - t
+        if parts is not None and not parts[3]:  # (each part was sewn with its own tolerance)
+            return CadResult(*parts[:3], timings, {**tols, "sew_tol": None}, *parts[3:])
     t = time.perf_counter()
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)

@@ -8,8 +8,6 @@ failing, faceted on its own), and the results are put in one compound.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from ..mesh.topology import face_components
@@ -25,7 +23,7 @@ from .fidelity import brep_fidelity  # noqa: E402
 __all__ = ["build_by_component"]
 
 
-def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
+def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=None):
     """Build each edge-connected part of a mesh on its own and put the results in one compound.
 
     Parameters
@@ -40,14 +38,19 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
         segment spread over several parts has its chart made anew in each.
     tol : float
         The modelling tolerance of the whole mesh (model units).
+    build : callable
+        ``build(V, F, labels, surfaces, uv=..., tol=...)`` for one part, returning an object
+        with ``shape``, ``faces`` and ``faceted_model``
+        (:func:`~igl_heatseg.cad.build.build_brep`, which calls this module, passes itself).
     progress : callable(stage, fraction), optional
 
     Returns
     -------
-    CadResult or None
-        None for a mesh of one part. Otherwise ``faces`` has one entry per segment, faceted
-        when any of its parts was; ``faceted_model`` is True only when every part was faceted
-        whole; ``fidelity`` is of the compound against the whole mesh.
+    tuple or None
+        None for a mesh of one part. Otherwise ``(shape, faces, fidelity, faceted_model,
+        message)``: the compound; one entry per segment, as ``build`` gives them, faceted when
+        any of its parts was; :func:`~igl_heatseg.cad.fidelity.brep_fidelity` of the compound
+        against the whole mesh; True only when every part was faceted whole; a summary.
 
     Examples
     --------
@@ -56,16 +59,15 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
     >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [5, 0, 0], [6, 0, 0], [5, 1, 0]])
     >>> F = np.array([[0, 1, 2], [3, 4, 5]])
     >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
-    >>> res = build_by_component(V, F, np.array([0, 0]), [z], None, 0.01)
-    >>> res.fidelity["faces"], [f["status"] for f in res.faces]
-    (2, ['built'])
+    >>> from igl_heatseg.cad.build import build_brep
+    >>> shape, faces, fid, whole, _ = build_by_component(V, F, np.array([0, 0]), [z], None,
+    ...                                                   0.01, build_brep)
+    >>> fid["faces"], [f["status"] for f in faces], whole
+    (2, ['built'], False)
     """
-    from .build import CadResult, build_brep  # the caller's module, loaded by now
-
     count, comp = face_components(F)
     if count < 2:
         return None
-    t0 = time.perf_counter()
     progress = progress or (lambda stage, frac: None)
     builder, compound = BRep_Builder(), TopoDS_Compound()
     builder.MakeCompound(compound)
@@ -77,8 +79,8 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
         faces = np.flatnonzero(comp == c)
         verts, Fl = np.unique(F[faces], return_inverse=True)
         segs, lab = np.unique(labels[faces], return_inverse=True)
-        res = build_brep(V[verts], Fl.reshape(-1, 3), lab, [surfaces[a] for a in segs],
-                         uv=_charts(uv, segs, verts, labels, comp, c), tol=tol)
+        res = build(V[verts], Fl.reshape(-1, 3), lab, [surfaces[a] for a in segs],
+                    uv=_charts(uv, segs, verts, labels, comp, c), tol=tol)
         builder.Add(compound, res.shape)
         whole += bool(res.faceted_model)
         for entry, a in zip(res.faces, segs.tolist(), strict=True):
@@ -90,8 +92,7 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, progress=None):
     fid = brep_fidelity(compound, V, F)
     message = (f"the model as a whole stayed invalid; built part by part: {whole} of {count} "
                f"parts fully faceted, {len(faceted)} of {len(surfaces)} segments faceted")
-    return CadResult(compound, status, fid, {"components": time.perf_counter() - t0},
-                     {"tol": float(tol)}, whole == count, message)
+    return compound, status, fid, whole == count, message
 
 
 def _charts(uv, segs, verts, labels, comp, c):

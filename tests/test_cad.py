@@ -515,6 +515,16 @@ def test_a_model_of_two_parts_that_stays_invalid_is_built_part_by_part(monkeypat
     assert res.faceted_model and res.message == "forced"
 
 
+def test_part_by_part_renumbers_charts_and_drops_spread_ones():
+    from igl_heatseg.cad.components import _charts
+
+    verts = np.array([4, 5, 7, 9])  # the part's vertices in the whole mesh
+    uv = [(np.array([5, 9]), np.zeros((2, 2))), None, (np.array([4, 7]), np.ones((2, 2)))]
+    out = _charts(uv, np.array([0, 1, 2]), verts, np.array([False, False, True]))
+    assert out[0][0].tolist() == [1, 3] and out[1] is None and out[2] is None
+    assert _charts(None, np.array([0]), verts, np.array([False])) is None
+
+
 def test_disk_chart_refuses_two_fans_sharing_a_vertex():
     from igl_heatseg.cad.freeform import disk_chart
 

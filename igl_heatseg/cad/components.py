@@ -74,13 +74,18 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
     faceted: dict = {}
     status = [None] * len(surfaces)
     whole = 0
+    k = len(surfaces)
+    lo, hi = np.full(k, count), np.full(k, -1)
+    np.minimum.at(lo, labels, comp)
+    np.maximum.at(hi, labels, comp)
+    spread = lo != hi  # segments with faces in more than one part (or in none)
     for c in range(count):
         progress("components", c / count)
         faces = np.flatnonzero(comp == c)
         verts, Fl = np.unique(F[faces], return_inverse=True)
         segs, lab = np.unique(labels[faces], return_inverse=True)
         res = build(V[verts], Fl.reshape(-1, 3), lab, [surfaces[a] for a in segs],
-                    uv=_charts(uv, segs, verts, labels, comp, c), tol=tol)
+                    uv=_charts(uv, segs, verts, spread), tol=tol)
         builder.Add(compound, res.shape)
         whole += bool(res.faceted_model)
         for entry, a in zip(res.faces, segs.tolist(), strict=True):
@@ -89,21 +94,26 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
             if entry["status"] != "built":
                 faceted[a] = True
     progress("components", 1.0)
+    for a in np.flatnonzero(hi < 0).tolist():  # a surface without faces: nothing to build
+        status[a] = dict(index=a, kind=surfaces[a].kind, status="faceted",
+                         reason="no faces in the mesh", built_as=None, max_dev=None,
+                         why_bspline=None)
+        faceted[a] = True
     fid = brep_fidelity(compound, V, F)
     message = (f"the model as a whole stayed invalid; built part by part: {whole} of {count} "
                f"parts fully faceted, {len(faceted)} of {len(surfaces)} segments faceted")
     return compound, status, fid, whole == count, message
 
 
-def _charts(uv, segs, verts, labels, comp, c):
-    """The charts of the segments ``segs`` of part ``c``, their vertex ids renumbered into the
-    part's ``verts``; None for a segment that reaches into another part."""
+def _charts(uv, segs, verts, spread):
+    """The charts of a part's segments ``segs``, their vertex ids renumbered into the part's
+    ``verts``; None for a segment ``spread`` over another part too."""
     if uv is None:
         return None
     out = []
     for a in segs.tolist():
         entry = uv[a]
-        if entry is None or np.any(comp[labels == a] != c):
+        if entry is None or spread[a]:
             out.append(None)
             continue
         ids, UV = (np.asarray(x) for x in entry)

@@ -516,13 +516,32 @@ def test_a_model_of_two_parts_that_stays_invalid_is_built_part_by_part(monkeypat
 
 
 def test_part_by_part_renumbers_charts_and_drops_spread_ones():
-    from igl_heatseg.cad.components import _charts
+    from types import SimpleNamespace
 
-    verts = np.array([4, 5, 7, 9])  # the part's vertices in the whole mesh
-    uv = [(np.array([5, 9]), np.zeros((2, 2))), None, (np.array([4, 7]), np.ones((2, 2)))]
-    out = _charts(uv, np.array([0, 1, 2]), verts, np.array([False, False, True]))
-    assert out[0][0].tolist() == [1, 3] and out[1] is None and out[2] is None
-    assert _charts(None, np.array([0]), verts, np.array([False])) is None
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+
+    from igl_heatseg.cad.components import build_by_component
+
+    # two parts of two triangles each; segment 1 has a triangle in both
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0],
+                  [5, 0, 0], [6, 0, 0], [5, 1, 0], [6, 1, 0]])
+    F = np.array([[0, 1, 2], [1, 3, 2], [4, 5, 6], [5, 7, 6]])
+    uv = [(np.array([0, 1, 2]), np.zeros((3, 2))), (np.array([1, 2, 3, 4, 5, 6]), np.ones((6, 2))),
+          (np.array([5, 6, 7]), np.full((3, 2), 2.0))]
+    seen = []
+
+    def build(Vp, Fp, labels, surfaces, uv=None, tol=None):
+        seen.append([None if c is None else (c[0].tolist(), float(c[1][0, 0])) for c in uv])
+        faces = [dict(index=i, kind="plane", status="built") for i in range(len(surfaces))]
+        return SimpleNamespace(shape=BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape(), faces=faces,
+                               faceted_model=False)
+
+    planes = box_planes()[:3]
+    shape, faces, fid, whole, message = build_by_component(V, F, np.array([0, 1, 1, 2]),
+                                                           planes, uv, 0.1, build)
+    # each part's vertices renumbered 0..3; the spread segment's chart left to the part builds
+    assert seen == [[([0, 1, 2], 0.0), None], [None, ([1, 2, 3], 2.0)]]
+    assert [f["index"] for f in faces] == [0, 1, 2] and not whole and fid["solids"] == 2
 
 
 def test_disk_chart_refuses_two_fans_sharing_a_vertex():

@@ -593,7 +593,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     if faceted_model:  # a part of the mesh that no rebuild mends need not facet the others
         t = time.perf_counter()
         parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], build_brep, progress)
-        timings["components"] = time.perf_counter() - t
+        if parts is not None:
+            timings["components"] = time.perf_counter() - t
         if parts is not None and not parts[3]:  # (each part was sewn with its own tolerance)
             return CadResult(*parts[:3], timings, {**tols, "sew_tol": None}, *parts[3:])
     t = time.perf_counter()

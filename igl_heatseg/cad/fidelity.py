@@ -8,6 +8,7 @@ import math
 import igl
 import numpy as np
 
+from ..mesh.geometry import face_areas
 from ._ocp import require_ocp
 
 require_ocp()
@@ -351,9 +352,7 @@ def _distances(shape, V, F, diag, areas=None):
 def _short_faces(TV, TF, tri_face, areas) -> np.ndarray:
     """(faces,) bool: the faces whose triangles cover less than 1 - TESSELLATION_SHORT of
     their area."""
-    A = 0.5 * np.linalg.norm(np.cross(TV[TF[:, 1]] - TV[TF[:, 0]], TV[TF[:, 2]] - TV[TF[:, 0]]),
-                             axis=1)
-    covered = np.bincount(tri_face, weights=A, minlength=len(areas))
+    covered = np.bincount(tri_face, weights=face_areas(TV, TF), minlength=len(areas))
     return covered < (1.0 - TESSELLATION_SHORT) * np.abs(np.asarray(areas, dtype=np.float64))
 
 

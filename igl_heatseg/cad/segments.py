@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from igl_heatseg.errors import MeshError
+from igl_heatseg.parameterization.split import PACKING_METHODS
 from igl_heatseg.surfaces.model import Surface
 from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
 from igl_heatseg.surfaces.select import fit_surface
@@ -114,9 +115,10 @@ def chart_uvs(labels: np.ndarray, surfaces, charts) -> list:
 
     A segment gets its chart's UV when it is freeform, its map is certified bijective and one
     UV per mesh vertex (the chart was not cut open).  Its chart is one chart, or the pieces of
-    one chart cut for packing (:func:`igl_heatseg.parameterization.split.cut_for_packing`):
-    they keep their chart's map, which is put together again.  Else ``None`` (the build then
-    makes its own harmonic chart for a disk).
+    one chart cut for packing (:func:`igl_heatseg.parameterization.split.cut_for_packing`,
+    :func:`~igl_heatseg.parameterization.split.peel_for_packing`): they keep their chart's
+    map, which is put together again.  Else ``None`` (the build then makes its own harmonic
+    chart for a disk).
 
     Parameters
     ----------
@@ -171,7 +173,7 @@ def _pieces_of_one_map(charts) -> bool:
     """Whether the charts are pieces of one chart cut for packing (its map restricted)."""
     return len({c.split_from for c in charts}) == 1 and charts[0].split_from is not None and all(
         c.param is not None and c.param.attempts
-        and c.param.attempts[-1].get("method") == "cut for packing" for c in charts)
+        and c.param.attempts[-1].get("method") in PACKING_METHODS for c in charts)
 
 
 def check_inputs(V, F, labels, surfaces, uv=None):

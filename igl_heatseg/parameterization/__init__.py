@@ -9,7 +9,8 @@ Imports only from ``mesh`` and below.
 
 Modules: ``cut`` and ``wedges`` (cutting), ``hessian`` (energies), ``prepare`` (chart checks,
 certificate orientation), ``eigenmap`` (Hessian maps), ``fallback`` (Tutte, repair, SLIM),
-``distortion``, ``chart`` (:func:`parameterize_chart`), ``split`` (cuts for distortion),
+``distortion``, ``chart`` (:func:`parameterize_chart`), ``split`` (cuts for distortion and
+for packing), ``spikes`` (spikes peeled off for packing),
 ``methods`` (baselines, :func:`~.methods.compare_methods`), ``bijectivity``, ``atlas`` and
 ``outline_pack`` (packing); ``param`` only re-exports old names.
 """

@@ -39,6 +39,7 @@ from ..mesh.geometry import face_areas, uv_areas
 from ..mesh.topology import boundary_loops, edge_topology, face_adjacency, face_components
 from .cut import CutResult, chart_topology
 from .distortion import face_sym_dirichlet
+from .spikes import split_spikes
 
 __all__ = [
     "split_for_distortion",
@@ -50,6 +51,8 @@ __all__ = [
     "SPLIT_MIN_FACES",
     "split_for_packing",
     "cut_for_packing",
+    "peel_for_packing",
+    "PACKING_METHODS",
     "PACK_MAX_ASPECT",
     "PACK_PIECE_ASPECT",
     "PACK_MIN_BOX_FILL",
@@ -422,6 +425,9 @@ PACK_MIN_AREA_FRACTION: float = 0.1
 #: helps (``igl_heatseg.pipeline.stages.parameterize_charts``).
 PACK_MAX_LENGTH: float = 0.7
 
+#: ``attempts[-1]["method"]`` of the pieces of a chart cut for packing, which keep its map.
+PACKING_METHODS: tuple = ("cut for packing", "spikes peeled for packing")
+
 #: The pipeline keeps such cuts only when the atlas fills at least this much more of its
 #: square with them (both layouts are packed).
 PACK_LONG_GAIN: float = 0.01
@@ -608,11 +614,6 @@ def cut_for_packing(
     >>> len(out), all(q.bijective for _, _, q in out)
     (5, True)
     """
-    import dataclasses
-
-    from .bijectivity import certify_map
-    from .distortion import distortion
-
     whole = [(np.arange(len(res.F)), res, param)]
     if not param.bijective:
         return whole
@@ -621,14 +622,71 @@ def cut_for_packing(
     pieces = split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)
     if pieces is None:
         return whole
+    return _restricted(res, param, pieces, name, PACKING_METHODS[0]) or whole
+
+
+def peel_for_packing(res: CutResult, param, gap: float, name: str = "chart") -> list:
+    """Peel the spikes off a chart for packing, keeping its map (restricted to every piece).
+
+    Parameters
+    ----------
+    res : CutResult
+        A disk chart.
+    param : ChartParam
+        Its (bijective) map, ``param.UV`` indexing ``res.V``.
+    gap : float
+        Gutter between charts in the atlas, in the units of ``res.V`` (the map is measured
+        at its true scale: UV area = 3D area).
+    name : str
+        Chart name for messages.
+
+    Returns
+    -------
+    list of (faces, CutResult, ChartParam)
+        As :func:`cut_for_packing` (:func:`~.spikes.split_spikes` chooses the pieces);
+        ``attempts`` gets a ``"spikes peeled for packing"`` record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.parameterization.chart import parameterize_chart
+    >>> from igl_heatseg.parameterization.cut import cut_to_disk
+    >>> V = np.array([[0.0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0], [10, 9.8, 0],
+    ...               [20, 9.9, 0]])
+    >>> F = np.array([[0, 1, 4], [0, 4, 3], [4, 2, 3], [4, 5, 2]])
+    >>> res = cut_to_disk(V, F)
+    >>> out = peel_for_packing(res, parameterize_chart(res.V, res.F), 0.1)
+    >>> [len(faces) for faces, _, _ in out], all(q.bijective for _, _, q in out)
+    ([3, 1], True)
+    """
+    whole = [(np.arange(len(res.F)), res, param)]
+    if not param.bijective:
+        return whole
+    uv_area = float(np.abs(uv_areas(param.UV, res.F)).sum())
+    scale = np.sqrt(_area(res) / max(uv_area, 1e-300))  # 3D length per UV length
+    pieces = split_spikes(param.UV, res.F, gap / scale)
+    if pieces is None:
+        return whole
+    return _restricted(res, param, pieces, name, PACKING_METHODS[1]) or whole
+
+
+def _restricted(res: CutResult, param, pieces: list, name: str, method: str) -> list | None:
+    """``(faces, CutResult, ChartParam)`` of every piece of a chart, the map restricted to
+    it and certified again (``None`` if a piece is not bijective, which cannot happen for a
+    piece of a bijective map)."""
+    import dataclasses
+
+    from .bijectivity import certify_map
+    from .distortion import distortion
+
     out = []
     for faces in pieces:
         sub = restrict_cut(res, faces)
         UV = param.UV[np.unique(res.F[faces])]
         cert = certify_map(UV, sub.F, name=name)
-        if not cert.bijective:  # cannot happen for a piece of a bijective map; be safe
-            return whole
-        rec = {"method": "cut for packing", "pieces": len(pieces), "seconds": 0.0}
+        if not cert.bijective:
+            return None
+        rec = {"method": method, "pieces": len(pieces), "seconds": 0.0}
         out.append(
             (
                 faces,
@@ -645,5 +703,5 @@ def cut_for_packing(
                 ),
             )
         )
-    log.info("%s: cut for packing into %d pieces", name, len(out))
+    log.info("%s: %s into %d pieces", name, method, len(out))
     return out

@@ -7,8 +7,11 @@
 
 from __future__ import annotations
 
+import copy
+import hashlib
 import logging
 import time
+from collections import OrderedDict
 from dataclasses import replace
 from typing import Literal, Sequence
 
@@ -18,7 +21,7 @@ from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas, uv_areas
 from ..mesh.topology import face_components
-from ..parameterization.atlas import PackedAtlas, atlas_corner_uv, pack_charts
+from ..parameterization.atlas import GUTTER_DEFAULT, PackedAtlas, atlas_corner_uv, pack_charts
 from ..parameterization.chart import HLLE_SKIP_CURVATURE, parameterize_chart
 from ..parameterization.cut import (
     CutError,
@@ -35,6 +38,7 @@ from ..parameterization.split import (
     SPLIT_SD_MAX,
     cut_for_packing,
     parameterize_pieces,
+    peel_for_packing,
 )
 from .results import Chart
 
@@ -50,6 +54,10 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: Fill of the square atlas assumed when the gutter is turned into model units for peeling
+#: spikes (the gutter is a fraction of the atlas side, unknown before packing).
+PEEL_FILL_GUESS: float = 0.65
 
 
 def check_cut_paths(mesh: CleanMesh, cut_paths: Sequence[tuple[int, int]]) -> None:
@@ -451,7 +459,8 @@ def parameterize_charts(
     Charts longer than ``PACK_MAX_LENGTH`` times the square root of the mesh's area are then
     cut across, their maps kept, when the atlas packs tighter that way (both layouts are
     packed: a long chart sets the side of a square atlas, but a mesh of one round chart gains
-    nothing from quarters).
+    nothing from quarters); then the spikes of charts are peeled off the same way (a coarse
+    export's slivers fanning out of a chart keep the other charts away).
     """
     progress = progress or (lambda stage, fraction=1.0: None)
     areas = face_areas(mesh.V, mesh.F) if areas is None else areas
@@ -464,7 +473,7 @@ def parameterize_charts(
     progress("param", 1.0)
     if split_sd_max > MESH_SD_MAX:
         _lower_mesh_energy(done, mesh, areas, opts)
-    _cut_long_charts(done, areas)
+    _cut_for_packing(done, areas)
     out = [c for _, pieces, _, _ in done for c in pieces]
     for i, c in enumerate(out):
         c.id = i
@@ -483,42 +492,83 @@ def _fill(charts: list) -> float:
     done = [ch for ch in charts if ch.param is not None and _packable(ch)]
     if not done:
         return 0.0
-    return pack_charts(
-        [ch.param.UV for ch in done], [ch.cut.F for ch in done], areas=[ch.area for ch in done]
-    ).fill
+    return _pack_once(done, GUTTER_DEFAULT).fill
 
 
-def _cut_long_charts(done: list, areas: np.ndarray) -> None:
-    """Cut the charts longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's area
-    across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`, maps kept), in place
-    in ``done`` (``(orig, pieces, cut_for_distortion, cut_for_packing)`` per chart), when the
-    atlas then fills at least ``PACK_LONG_GAIN`` more of its square."""
+#: The last layouts packed (a trial layout of :func:`_trial_cut` is usually the one
+#: :func:`pack` packs next: packing it again would cost one more packing, ~1-2 s).
+_PACKED: OrderedDict = OrderedDict()
+
+
+def _pack_once(done: list, gutter: float) -> PackedAtlas:
+    """:func:`pack_charts` of the charts' maps (UV area = 3D area), the layout of an identical
+    call reused (the inputs' bytes are the key; the two last layouts are kept)."""
+    uvs, faces = [ch.param.UV for ch in done], [ch.cut.F for ch in done]
+    areas = np.array([ch.area for ch in done], dtype=np.float64)
+    h = hashlib.blake2b(np.float64(gutter).tobytes() + areas.tobytes(), digest_size=16)
+    for UV, F in zip(uvs, faces, strict=True):
+        h.update(np.ascontiguousarray(UV, dtype=np.float64).tobytes())
+        h.update(np.ascontiguousarray(F, dtype=np.int64).tobytes())
+    key = h.hexdigest()
+    if key not in _PACKED:
+        _PACKED[key] = pack_charts(uvs, faces, areas=areas, gutter=gutter)
+        while len(_PACKED) > 2:
+            _PACKED.popitem(last=False)
+    _PACKED.move_to_end(key)
+    return _PACKED[key]
+
+
+def _cut_for_packing(done: list, areas: np.ndarray) -> None:
+    """Cut charts for packing, in place in ``done`` (``(orig, pieces, cut_for_distortion,
+    cut_for_packing)`` per chart), keeping each kind of cut only when the atlas then fills
+    at least ``PACK_LONG_GAIN`` more of its square (both layouts are packed):
+
+    1. charts longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's area, cut
+       across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`);
+    2. then the spikes peeled off every chart whose pieces cost less room than it
+       (:func:`~igl_heatseg.parameterization.split.peel_for_packing`; the gutter is
+       estimated for a square filled to :data:`PEEL_FILL_GUESS`).
+
+    The maps are kept (restricted to the pieces)."""
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
+    fill = _trial_cut(done, areas, "long charts cut", lambda c, name: cut_for_packing(
+        c.cut, c.param, name, max_length=bound, big=False))
+    total = sum(c.area for d in done for c in d[1] if c.param is not None)
+    gap = GUTTER_DEFAULT * float(np.sqrt(total / PEEL_FILL_GUESS))
+    _trial_cut(done, areas, "spikes peeled", lambda c, name: peel_for_packing(
+        c.cut, c.param, gap, name), fill)
+
+
+def _trial_cut(done: list, areas: np.ndarray, what: str, cut, fill: float | None = None):
+    """Cut every bijectively mapped piece of ``done`` by ``cut(chart, name)`` (a list of
+    ``(faces, CutResult, ChartParam)``), and keep the cuts when the atlas fills at least
+    ``PACK_LONG_GAIN`` more; ``fill``: the fill of ``done`` as it is, when known.  Returns
+    the fill of the layout kept (``fill`` when nothing was cut)."""
     new = []
     for orig, pieces, _, _ in done:
         out = []
         for c in pieces:
-            cut = [(np.arange(len(c.faces)), c.cut, c.param)]
-            if c.param is not None and c.param.bijective:
-                cut = cut_for_packing(c.cut, c.param, f"chart {orig.id}", max_length=bound,
-                                      big=False)
-            out += [c] if len(cut) == 1 else [
+            mapped = c.param is not None and c.param.bijective
+            got = cut(c, f"chart {orig.id}") if mapped else []
+            out += [c] if len(got) <= 1 else [
                 replace(c, id=-1, faces=c.faces[rows], area=float(areas[c.faces[rows]].sum()),
                         cut=sub, param=q, split_from=orig.id,
                         chart_cut=c.chart_cut if c.split_from is not None else c.cut)
-                for rows, sub, q in cut]
+                for rows, sub, q in got]
         new.append(out)
     if all(len(out) == len(d[1]) for out, d in zip(new, done, strict=True)):
-        return
-    before = _fill([c for d in done for c in d[1]])
+        return fill
+    before = _fill([c for d in done for c in d[1]]) if fill is None else fill
     after = _fill([c for out in new for c in out])
-    log.info("long charts cut for packing: fill %.3f -> %.3f%s", before, after,
-             "" if after >= before + PACK_LONG_GAIN else " (not kept)")
-    if after < before + PACK_LONG_GAIN:
-        return
+    kept = after >= before + PACK_LONG_GAIN
+    log.info("%s for packing: fill %.3f -> %.3f%s", what, before, after,
+             "" if kept else " (not kept)")
+    if not kept:
+        return before
     for i, out in enumerate(new):
         if len(out) != len(done[i][1]):
             done[i] = (done[i][0], out, done[i][2], True)
+    return after
 
 
 def _excess(pieces: list, signed: bool = False) -> float:
@@ -597,13 +647,8 @@ def pack(
             log.warning("chart %d: degenerate UVs, left out of the atlas", ch.id)
     if not done:
         return np.zeros((m, 3, 2)), None
-    kw = {} if gutter is None else {"gutter": gutter}
-    atlas = pack_charts(
-        [ch.param.UV for ch in done],
-        [ch.cut.F for ch in done],
-        areas=[ch.area for ch in done],
-        **kw,
-    )
+    # a copy: the layout kept for reuse is not shared with the charts of this run
+    atlas = copy.deepcopy(_pack_once(done, GUTTER_DEFAULT if gutter is None else gutter))
     for ch, uv, box in zip(done, atlas.uvs, atlas.boxes, strict=True):
         ch.uv = uv
         ch.atlas_box = np.asarray(box, dtype=np.float64)

@@ -111,6 +111,28 @@ def test_peeled_pieces_keep_the_map_whatever_its_scale():
             assert len(sub.F) == len(faces)
     assert sizes[0] == sizes[1] == [1, 1, 1, 1, 1, 200]
     assert len(peel_for_packing(res, param, gap=0.2, name="comb")) == 6
+
+
+def test_no_piece_is_peeled_off_more_stretched_than_the_bound_and_its_chart():
+    """Spikes whose map is stretched 2.5 times along their length: alone (the scale
+    normalised away), each has energy 5.8, above the per-chart bound (5), which the chart as
+    a whole meets (4.6); the chart stays whole, unless the bound is raised."""
+    from igl_heatseg.parameterization.distortion import distortion
+
+    P, F = comb()
+    V = np.c_[P, np.zeros(len(P))]
+    res = cut_to_disk(V, F)
+    param = parameterize_chart(res.V, res.F)
+    UV = res.V[:, :2].copy()  # the flat comb's isometric map, then its tips at 30, not 18
+    tips = np.flatnonzero(UV[:, 1] > 10.5)
+    UV[tips, 1] = 10 + 2.5 * (UV[tips, 1] - 10)
+    sd = distortion(res.V, res.F, UV)
+    stretched = dataclasses.replace(param, UV=UV, distortion=sd)
+    assert sd["sym_dirichlet"] == pytest.approx((100 * 4.1 + 20 * 7.25) / 120)
+    spike = res.F[-1:]
+    assert distortion(res.V, spike, UV)["sym_dirichlet"] == pytest.approx(5.8)
+    assert len(peel_for_packing(res, stretched, gap=0.2)) == 1
+    assert len(peel_for_packing(res, stretched, gap=0.2, sd_max=50.0)) == 6
     assert peel_for_packing(res, dataclasses.replace(param, bijective=False), 0.2)[0][2] is not None
 
 
@@ -138,7 +160,7 @@ def test_pipeline_peels_a_comb_only_when_the_atlas_packs_tighter(monkeypatch):
     ids, UV = chart_uvs(labels, free, res.charts)[0]
     assert len(ids) == len(P) and np.isfinite(UV).all()
 
-    monkeypatch.setattr(stages, "peel_for_packing", lambda res, param, gap, name: [
+    monkeypatch.setattr(stages, "peel_for_packing", lambda res, param, gap, name, **kw: [
         (np.arange(len(res.F)), res, param)])
     whole = run_pipeline(mesh)
     assert len(whole.charts) == len(res.charts) - len(peeled) + 1

@@ -625,7 +625,9 @@ def cut_for_packing(
     return _restricted(res, param, pieces, name, PACKING_METHODS[0]) or whole
 
 
-def peel_for_packing(res: CutResult, param, gap: float, name: str = "chart") -> list:
+def peel_for_packing(
+    res: CutResult, param, gap: float, name: str = "chart", sd_max: float = SPLIT_SD_MAX
+) -> list:
     """Peel the spikes off a chart for packing, keeping its map (restricted to every piece).
 
     Parameters
@@ -639,6 +641,9 @@ def peel_for_packing(res: CutResult, param, gap: float, name: str = "chart") -> 
         at its true scale: UV area = 3D area).
     name : str
         Chart name for messages.
+    sd_max : float
+        The chart is left whole when a piece's symmetric Dirichlet energy is above this and
+        above the chart's own (a sliver alone can be more stretched than its chart).
 
     Returns
     -------
@@ -667,7 +672,11 @@ def peel_for_packing(res: CutResult, param, gap: float, name: str = "chart") -> 
     pieces = split_spikes(param.UV, res.F, gap / scale)
     if pieces is None:
         return whole
-    return _restricted(res, param, pieces, name, PACKING_METHODS[1]) or whole
+    out = _restricted(res, param, pieces, name, PACKING_METHODS[1])
+    bound = max(sd_max, param.distortion.get("sym_dirichlet", np.inf))
+    if out is None or any(q.distortion.get("sym_dirichlet", np.inf) > bound for *_, q in out):
+        return whole  # a sliver alone can be more stretched than its chart on average
+    return out
 
 
 def _restricted(res: CutResult, param, pieces: list, name: str, method: str) -> list | None:

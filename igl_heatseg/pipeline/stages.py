@@ -473,7 +473,7 @@ def parameterize_charts(
     progress("param", 1.0)
     if split_sd_max > MESH_SD_MAX:
         _lower_mesh_energy(done, mesh, areas, opts)
-    _cut_for_packing(done, areas)
+    _cut_for_packing(done, areas, split_sd_max)
     out = [c for _, pieces, _, _ in done for c in pieces]
     for i, c in enumerate(out):
         c.id = i
@@ -518,7 +518,7 @@ def _pack_once(done: list, gutter: float) -> PackedAtlas:
     return _PACKED[key]
 
 
-def _cut_for_packing(done: list, areas: np.ndarray) -> None:
+def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float) -> None:
     """Cut charts for packing, in place in ``done`` (``(orig, pieces, cut_for_distortion,
     cut_for_packing)`` per chart), keeping each kind of cut only when the atlas then fills
     at least ``PACK_LONG_GAIN`` more of its square (both layouts are packed):
@@ -527,7 +527,8 @@ def _cut_for_packing(done: list, areas: np.ndarray) -> None:
        across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`);
     2. then the spikes peeled off every chart whose pieces cost less room than it
        (:func:`~igl_heatseg.parameterization.split.peel_for_packing`; the gutter is
-       estimated for a square filled to :data:`PEEL_FILL_GUESS`).
+       estimated for a square filled to :data:`PEEL_FILL_GUESS`), unless a piece's energy
+       is above ``sd_max`` and its chart's.
 
     The maps are kept (restricted to the pieces)."""
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
@@ -536,7 +537,7 @@ def _cut_for_packing(done: list, areas: np.ndarray) -> None:
     total = sum(c.area for d in done for c in d[1] if c.param is not None)
     gap = GUTTER_DEFAULT * float(np.sqrt(total / PEEL_FILL_GUESS))
     _trial_cut(done, areas, "spikes peeled", lambda c, name: peel_for_packing(
-        c.cut, c.param, gap, name), fill)
+        c.cut, c.param, gap, name, sd_max=sd_max), fill)
 
 
 def _trial_cut(done: list, areas: np.ndarray, what: str, cut, fill: float | None = None):

@@ -83,36 +83,37 @@ def packing_cost(UV: np.ndarray, F: np.ndarray, gap: float) -> float:
     return float(hull.volume + hull.area * gap / 2 + np.pi * gap * gap / 4)
 
 
-def _components(F: np.ndarray, sel: np.ndarray, ef: np.ndarray) -> list:
-    """Edge-connected components of the faces ``sel`` (face index arrays)."""
-    idx = np.flatnonzero(sel)
-    if len(idx) == 0:
-        return []
-    keep = sel[ef[:, 0]] & sel[ef[:, 1]]
-    m = len(F)
+def _components(m: int, side: np.ndarray, ef: np.ndarray) -> np.ndarray:
+    """Component id of every face: faces edge-connected on the same ``side`` (bool per face)."""
+    keep = side[ef[:, 0]] == side[ef[:, 1]]
     A = sp.csr_matrix((np.ones(int(keep.sum())), (ef[keep, 0], ef[keep, 1])), shape=(m, m))
-    _, lab = connected_components(A, directed=False)
-    return [idx[lab[idx] == c] for c in np.unique(lab[idx])]
+    return connected_components(A, directed=False)[1]
 
 
-def _open(P: np.ndarray, F: np.ndarray, r: float, t: float, ef: np.ndarray) -> list | None:
-    """Pieces of the chart (``P``: its map, minimum at the origin) for the opening radius ``r``
-    on a raster of pixel ``t``; ``None`` when nothing is peeled or a piece is not a disk."""
-    pad = 2
-    M = rasterize_chart(P, F, t, pad)
-    core = ndimage.distance_transform_edt(M) > r / t
+def _open(
+    P: np.ndarray, F: np.ndarray, D: np.ndarray, pix: np.ndarray, t: float, r: float,
+    ef: np.ndarray,
+) -> list | None:
+    """Pieces of the chart (``P``: its map, minimum at the origin; ``D``: each pixel's
+    distance to the outside of the chart's raster of pixel ``t``, in the units of ``P``;
+    ``pix``: each face's centroid pixel) for the opening radius ``r``; ``None`` when nothing
+    is peeled or a piece is not a disk."""
+    core = D > r
     if not core.any():
         return None
-    body = ndimage.distance_transform_edt(~core) <= r / t
-    c = np.floor(P[F].mean(axis=1) / t + pad).astype(np.int64)
-    c = np.clip(c, 0, [M.shape[1] - 1, M.shape[0] - 1])
-    inside = body[c[:, 1], c[:, 0]]
-    for spike in _components(F, ~inside, ef):
+    body = ndimage.distance_transform_edt(~core, sampling=t) <= r
+    inside = body[pix[:, 1], pix[:, 0]]
+    if inside.all():
+        return None
+    comp = _components(len(F), inside, ef)
+    for c in np.unique(comp[~inside]):  # a tooth stays with the body
+        spike = np.flatnonzero(comp == c)
         if np.hypot(*np.ptp(P[np.unique(F[spike])], axis=0)) < SPIKE_TOOTH * r:
             inside[spike] = True
     if inside.all():
         return None
-    pieces = _components(F, inside, ef) + _components(F, ~inside, ef)
+    comp = _components(len(F), inside, ef)
+    pieces = [np.flatnonzero(comp == c) for c in np.unique(comp)]
     if not all(chart_topology(F[p], name="piece").is_disk for p in pieces):
         return None
     return pieces
@@ -161,10 +162,15 @@ def split_spikes(UV: np.ndarray, F: np.ndarray, gap: float) -> list | None:
     topo = edge_topology(G)
     ef = topo.EF[topo.edge_face_count == 2]
     t = np.sqrt(area) / SPIKE_RASTER
+    pad = 2
+    M = rasterize_chart(P, G, t, pad)
+    D = ndimage.distance_transform_edt(M, sampling=t)
+    pix = np.floor(P[G].mean(axis=1) / t + pad).astype(np.int64)
+    pix = np.clip(pix, 0, [M.shape[1] - 1, M.shape[0] - 1])
     whole = packing_cost(P, G, gap)
     best, best_cost = None, whole * (1 - SPIKE_MIN_GAIN)
     for frac in SPIKE_RADII:
-        pieces = _open(P, G, frac * np.sqrt(area), t, ef)
+        pieces = _open(P, G, D, pix, t, frac * np.sqrt(area), ef)
         if pieces is None:
             continue
         cost = sum(packing_cost(P, G[p], gap) for p in pieces)

@@ -713,3 +713,26 @@ def test_fit_faces_keeps_a_coarse_half_cylinder_curved():
     s = fit_faces(V, F, np.arange(len(F)), 1e-3)
     assert s.kind == "cylinder", s.kind
     assert s.params["radius"] == pytest.approx(4.0, rel=1e-6)
+
+
+def test_fit_of_a_segment_whose_one_face_holds_nearly_all_its_area():
+    """A quarter cylinder of small faces and one long sliver along the axis holding 97 % of
+    the area (a repaired STL's segment): the least-trimmed step that looks for a simpler
+    surface on most of the area keeps no face, and is skipped (it crashed on the repaired
+    abc_stl2_00000002_001 in robust mode). Also: the samples of no face are empty floats."""
+    from igl_heatseg.surfaces.samples import vertex_samples
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    t, z = np.meshgrid(np.linspace(0, np.pi / 2, 9), np.linspace(0, 1, 5))
+    V = np.c_[np.cos(t.ravel()), np.sin(t.ravel()), z.ravel()]
+    i = np.arange(45).reshape(5, 9)[:-1, :-1].ravel()
+    F = np.r_[np.c_[i, i + 1, i + 10], np.c_[i, i + 10, i + 9]]
+    V = np.r_[V, [[1, 0, 200], [np.cos(0.6), np.sin(0.6), 100]]]
+    F = np.r_[F, [[0, 45, 46]]]
+    A = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    assert A[-1] > 0.95 * A.sum()
+    s = fit_faces(V, F, np.arange(len(F)), 1e-6)
+    assert s.kind == "cylinder" and s.params["radius"] == pytest.approx(1.0)
+    P, N, w = vertex_samples(V, F, np.zeros(0, np.int64))
+    assert P.shape == N.shape == (0, 3) and w.shape == (0,)
+    assert N.dtype == w.dtype == np.float64

@@ -175,8 +175,9 @@ def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray, W: np.ndarra
     A = face_areas(V, Fs)
     FN = face_normals(V if W is None else W, Fs)
     AN = np.repeat(FN * A[:, None], 3, axis=0)  # one row per corner
+    # (bincount of no faces is int64: float64 so that an empty set gives empty float arrays)
     N = np.stack([np.bincount(inv.ravel(), weights=AN[:, c], minlength=len(verts))
-                  for c in range(3)], axis=1)
+                  for c in range(3)], axis=1).astype(np.float64)
     N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
     w = np.bincount(inv.ravel(), weights=np.repeat(A / 3.0, 3), minlength=len(verts))
-    return V[verts], N, w
+    return V[verts], N, w.astype(np.float64)

@@ -189,7 +189,7 @@ def _faces_on_trimmed(V, F, faces, tol, start: Surface, refit, min_kept: int = 0
     order = np.argsort(corner_max_dev(V, F, faces, start), kind="stable")
     keep = np.zeros(len(faces), dtype=bool)
     keep[order[np.cumsum(A[order]) <= (1.0 - TRIM_SHARE) * A.sum()]] = True
-    if keep.sum() < min_kept:
+    if keep.sum() < max(min_kept, 1):  # one face can hold more than the share kept
         return None
     s = refit(faces[keep])
     if s is None:

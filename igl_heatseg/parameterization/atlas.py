@@ -44,7 +44,7 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Gap between chart boxes, as a fraction of the atlas side (2 texels at 1024 px ~ 0.002).
+#: Gap between charts, as a fraction of the atlas side (4 texels of a 1024 px texture, 2 of 512).
 GUTTER_DEFAULT: float = 0.004
 
 #: Shelf widths tried, as multiples of ``sqrt(sum of box areas)``.

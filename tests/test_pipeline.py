@@ -214,6 +214,30 @@ def test_run_subcommand(tmp_path):
     assert (out / "atlas.obj").exists() and (out / "charts" / "chart_000.obj").exists()
 
 
+def test_run_gutter_option(tmp_path, capsys, can_mesh):
+    """``--gutter``: the gap between charts as a fraction of the atlas side; a wider gutter
+    fills less; out of [0, 0.5) it is refused before any work (argparse's exit code 2; the
+    library's MeshError)."""
+    from igl_heatseg.cli import main
+
+    V, F = can()
+    mesh_path = tmp_path / "can.obj"
+    igl.writeOBJ(str(mesh_path), V, F)
+    reps = {}
+    for g in ("0.001", "0.05"):
+        assert main(["run", str(mesh_path), "-o", str(tmp_path / g), "--gutter", g,
+                     "--no-pictures"]) == 0
+        reps[g] = json.loads((tmp_path / g / "report.json").read_text())["parameterization"]
+    assert reps["0.05"]["atlas_gutter"] > 10 * reps["0.001"]["atlas_gutter"] > 0
+    assert reps["0.05"]["atlas_fill"] < reps["0.001"]["atlas_fill"]
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(mesh_path), "-o", str(tmp_path / "bad"), "--gutter", "0.5"])
+    assert e.value.code == 2 and "must be in [0, 0.5)" in capsys.readouterr().err
+    with pytest.raises(MeshError, match="gutter"):
+        run_pipeline(can_mesh, gutter=float("nan"))
+
+
 def test_splitting_user_path_is_reported_not_fatal(can_mesh):
     # Both ends on the bottom loop: the path cuts the side in two pieces.
     res = run_pipeline(can_mesh, cut_paths=[(0, NU // 2)])

@@ -197,6 +197,7 @@ def run_file(
     step: bool = False,
     tol: float | None = None,
     progress=None,
+    gutter: float | None = None,
 ) -> JobOutput:
     """Load, run the pipeline and write one mesh: what ``igl-heatseg run MESH -o OUT`` does.
 
@@ -205,7 +206,7 @@ def run_file(
     mesh_path, out, repair
         As for :func:`segment_file`; ``out`` also gets ``charts/chart_NNN.obj``, ``atlas.obj``
         and, with ``pictures``, ``segmentation.png`` and ``checker.png``.
-    mode, theta, eps, solver, energy, cut, cut_paths
+    mode, theta, eps, solver, energy, cut, cut_paths, gutter
         As for :func:`~igl_heatseg.pipeline.run_pipeline`.
     pictures : bool
         Render the pictures (skipped with a warning without the ``viz`` extra).
@@ -239,6 +240,7 @@ def run_file(
         cut=cut,
         cut_paths=list(cut_paths or []),
         progress=progress,
+        gutter=gutter,
     )
     extra = {"input": str(Path(mesh_path).resolve()), "timings": {"load": t_load}}
     extra.update(input_report(mesh, res.segmentation.labels))

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..batch.jobs import run_file, write_pictures
+from ..parameterization.atlas import GUTTER_DEFAULT
 from .cad import cad_summary
 from .common import (
     add_progress_argument,
@@ -83,7 +84,19 @@ def _run_file(args: argparse.Namespace):
         step=bool(getattr(args, "step", False)),
         tol=getattr(args, "tol", None),
         progress=progress_for(args),
+        gutter=args.gutter,
     )
+
+
+def _gutter(text: str) -> float:
+    """``--gutter``: a number in ``[0, 0.5)``."""
+    try:
+        g = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0 <= g < 0.5:
+        raise argparse.ArgumentTypeError(f"must be in [0, 0.5), got {text}")
+    return g
 
 
 def register(subparsers) -> None:
@@ -129,6 +142,14 @@ def register(subparsers) -> None:
         metavar="V0:V1",
         help="cut the chart holding input vertices V0 and V1 along the shortest path between "
         "them (the ends of a generatrix, paper §3.5); repeatable",
+    )
+    p.add_argument(
+        "--gutter",
+        type=_gutter,
+        default=None,
+        metavar="G",
+        help="gap between charts in the atlas, a fraction of its side in [0, 0.5) (default "
+        f"{GUTTER_DEFAULT}: 4 texels of a 1024 px texture)",
     )
     p.add_argument(
         "--no-pictures",

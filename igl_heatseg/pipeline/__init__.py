@@ -106,7 +106,8 @@ def run_pipeline(
     fallback : str
         Passed to ``parameterize_chart``.
     gutter : float, optional
-        Atlas gutter (default :data:`igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`).
+        Gap between charts in the atlas, a fraction of its side in ``[0, 0.5)`` (default
+        :data:`igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`, 4 texels at 1024 px).
     progress : callable(stage, fraction), optional
     solver : {"fast", "exact"}
         Heat solver for the segmentation (see :func:`igl_heatseg.segmentation.paper.segment_mesh`).
@@ -154,6 +155,8 @@ def run_pipeline(
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
     if energy not in ("auto", "hlle", "curved"):
         raise MeshError(f"`energy` must be 'auto', 'hlle' or 'curved', got {energy!r}")
+    if gutter is not None and not (isinstance(gutter, (int, float)) and 0 <= gutter < 0.5):
+        raise MeshError(f"`gutter` must be a number in [0, 0.5), got {gutter!r}")
     resolve_params(mode, theta, eps)  # before the (long) segmentation
     t0 = time.perf_counter()
     check_cut_paths(mesh, cut_paths)  # before the (long) segmentation
@@ -186,6 +189,7 @@ def run_pipeline(
         split_sd_max=split_sd_max,
         areas=areas,
         progress=progress,
+        gutter=gutter,
     )
     timings["param"] = time.perf_counter() - t
 

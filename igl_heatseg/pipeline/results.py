@@ -201,6 +201,8 @@ class PipelineResult:
             "cut": self.cut,
             "cut_paths_input": [list(map(int, p)) for p in self.cut_paths],
             "atlas_fill": float(self.atlas.fill) if self.atlas is not None else 0.0,
+            # the gap between charts, a fraction of the atlas side
+            "atlas_gutter": float(self.atlas.gutter) if self.atlas is not None else 0.0,
         }
         return {
             "charts": [ch.to_report() for ch in charts],

@@ -432,6 +432,7 @@ def parameterize_charts(
     split_sd_max: float = SPLIT_SD_MAX,
     areas: np.ndarray | None = None,
     progress=None,
+    gutter: float | None = None,
 ) -> tuple[list[Chart], int, int]:
     """Stage 3: :func:`map_chart` every chart; pieces of a split chart replace it.
 
@@ -446,6 +447,10 @@ def parameterize_charts(
         Face areas (computed if not given).
     progress : callable(stage, fraction), optional
         Called with stage ``"param"``.
+    gutter : float, optional
+        The atlas gutter :func:`pack` will use (default
+        :data:`igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`): cuts for packing are
+        judged by layouts with it.
 
     Returns
     -------
@@ -473,7 +478,8 @@ def parameterize_charts(
     progress("param", 1.0)
     if split_sd_max > MESH_SD_MAX:
         _lower_mesh_energy(done, mesh, areas, opts)
-    _cut_for_packing(done, areas, split_sd_max)
+    gutter = GUTTER_DEFAULT if gutter is None else gutter
+    _cut_for_packing(done, areas, split_sd_max, gutter)
     out = [c for _, pieces, _, _ in done for c in pieces]
     for i, c in enumerate(out):
         c.id = i
@@ -486,13 +492,13 @@ def _packable(ch: Chart) -> bool:
     return bool(np.isfinite(UV).all() and np.abs(uv_areas(UV, ch.cut.F)).sum() > 0)
 
 
-def _fill(charts: list) -> float:
+def _fill(charts: list, gutter: float) -> float:
     """Atlas fill of :func:`pack`'s layout of ``charts`` with the default gutter (0 when none
     can be packed)."""
     done = [ch for ch in charts if ch.param is not None and _packable(ch)]
     if not done:
         return 0.0
-    return _pack_once(done, GUTTER_DEFAULT).fill
+    return _pack_once(done, gutter).fill
 
 
 #: The last layouts packed (a trial layout of :func:`_trial_cut` is usually the one
@@ -518,7 +524,7 @@ def _pack_once(done: list, gutter: float) -> PackedAtlas:
     return _PACKED[key]
 
 
-def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float) -> None:
+def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float) -> None:
     """Cut charts for packing, in place in ``done`` (``(orig, pieces, cut_for_distortion,
     cut_for_packing)`` per chart), keeping each kind of cut only when the atlas then fills
     at least ``PACK_LONG_GAIN`` more of its square (both layouts are packed):
@@ -532,15 +538,17 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float) -> None:
 
     The maps are kept (restricted to the pieces)."""
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
-    fill = _trial_cut(done, areas, "long charts cut", lambda c, name: cut_for_packing(
+    fill = _trial_cut(done, areas, gutter, "long charts cut", lambda c, name: cut_for_packing(
         c.cut, c.param, name, max_length=bound, big=False))
     total = sum(c.area for d in done for c in d[1] if c.param is not None)
-    gap = GUTTER_DEFAULT * float(np.sqrt(total / PEEL_FILL_GUESS))
-    _trial_cut(done, areas, "spikes peeled", lambda c, name: peel_for_packing(
+    gap = gutter * float(np.sqrt(total / PEEL_FILL_GUESS))
+    _trial_cut(done, areas, gutter, "spikes peeled", lambda c, name: peel_for_packing(
         c.cut, c.param, gap, name, sd_max=sd_max), fill)
 
 
-def _trial_cut(done: list, areas: np.ndarray, what: str, cut, fill: float | None = None):
+def _trial_cut(
+    done: list, areas: np.ndarray, gutter: float, what: str, cut, fill: float | None = None
+):
     """Cut every bijectively mapped piece of ``done`` by ``cut(chart, name)`` (a list of
     ``(faces, CutResult, ChartParam)``), and keep the cuts when the atlas fills at least
     ``PACK_LONG_GAIN`` more; ``fill``: the fill of ``done`` as it is, when known.  Returns
@@ -559,8 +567,8 @@ def _trial_cut(done: list, areas: np.ndarray, what: str, cut, fill: float | None
         new.append(out)
     if all(len(out) == len(d[1]) for out, d in zip(new, done, strict=True)):
         return fill
-    before = _fill([c for d in done for c in d[1]]) if fill is None else fill
-    after = _fill([c for out in new for c in out])
+    before = _fill([c for d in done for c in d[1]], gutter) if fill is None else fill
+    after = _fill([c for out in new for c in out], gutter)
     kept = after >= before + PACK_LONG_GAIN
     log.info("%s for packing: fill %.3f -> %.3f%s", what, before, after,
              "" if kept else " (not kept)")

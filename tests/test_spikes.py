@@ -159,6 +159,18 @@ def test_pipeline_peels_a_comb_only_when_the_atlas_packs_tighter(monkeypatch):
     free = [Surface("freeform", {"centroid": mesh.V.mean(axis=0)})]
     ids, UV = chart_uvs(labels, free, res.charts)[0]
     assert len(ids) == len(P) and np.isfinite(UV).all()
+    # the pictures draw the pieces as the one map they come from: every vertex at one place
+    from igl_heatseg.viz.layout import chart_layout, map_groups
+
+    assert map_groups(res.charts) == [list(range(len(res.charts)))]
+    placed = chart_layout(mesh.V, res.charts)
+    at: dict = {}
+    for c, uv in zip(res.charts, placed, strict=True):
+        used = np.unique(c.cut.F)
+        for v, xy in zip(c.cut.vertex_map[used], uv[used], strict=True):
+            at.setdefault(int(v), []).append(xy)
+    assert len(at) == len(P)
+    assert max(float(np.ptp(np.array(xy), axis=0).max()) for xy in at.values()) < 1e-9
 
     monkeypatch.setattr(stages, "peel_for_packing", lambda res, param, gap, name, **kw: [
         (np.arange(len(res.F)), res, param)])

@@ -24,7 +24,9 @@ from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike
+from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, uv_areas
 
@@ -37,6 +39,7 @@ __all__ = [
     "flipped_faces",
     "corner_uv",
     "chart_layout",
+    "map_groups",
     "scene_points",
 ]
 
@@ -80,13 +83,88 @@ def _uv(c: Chart) -> np.ndarray:
 
 def _normalised_uv(V: np.ndarray, c: Chart) -> np.ndarray:
     """The chart's UV centred at its centroid and scaled to the chart's 3D area, (nc, 2)."""
-    F, UV = np.asarray(c.cut.F, dtype=np.int64), _uv(c)
-    a3 = float(face_areas(V[c.cut.vertex_map], F).sum())
-    a2 = float(np.abs(uv_areas(UV, F)).sum())
+    return _normalised_group(V, [c])[0]
+
+
+def _normalised_group(V: np.ndarray, cs: list) -> list[np.ndarray]:
+    """The UVs of pieces of one map, centred and scaled together to their 3D area."""
+    a3 = a2 = 0.0
+    cents = []
+    for c in cs:
+        F, UV = np.asarray(c.cut.F, dtype=np.int64), _uv(c)
+        a3 += float(face_areas(V[c.cut.vertex_map], F).sum())
+        a2 += float(np.abs(uv_areas(UV, F)).sum())
+        cents.append(UV[np.unique(F)])
     s = math.sqrt(a3 / a2) if a2 > 0 and a3 > 0 else 1.0
-    used = np.unique(F)
-    uv = (UV - UV[used].mean(axis=0)) * s
-    return np.nan_to_num(uv, nan=0.0)  # rows of vertices F does not use
+    centre = np.concatenate(cents).mean(axis=0)
+    # rows of vertices F does not use are NaN: zeros
+    return [np.nan_to_num((_uv(c) - centre) * s, nan=0.0) for c in cs]
+
+
+def map_groups(charts: Sequence[Chart]) -> list[list[int]]:
+    """Charts drawn as one map: the pieces of a chart cut for packing (they keep its map, see
+    :data:`igl_heatseg.parameterization.split.PACKING_METHODS`) together, every other chart
+    alone; in the order of their first chart.
+
+    Pieces come from one map when they come from one chart and touch where their UVs are the
+    same (pieces of a chart cut for distortion have maps of their own, which differ along the
+    seam between them).
+
+    Parameters
+    ----------
+    charts : sequence of igl_heatseg.pipeline.Chart
+        With maps (see :func:`drawable_charts`).
+
+    Returns
+    -------
+    list of list of int
+        Indices into ``charts``.
+
+    Examples
+    --------
+    Two pieces of one map (vertex 1 at the same UV in both) and a chart of its own:
+
+    >>> from types import SimpleNamespace as NS
+    >>> whole, F = object(), np.array([[0, 1, 2]])
+    >>> def piece(ids, UV, method="cut for packing"):
+    ...     return NS(param=NS(attempts=[{"method": method}], UV=np.array(UV, float)),
+    ...               chart_cut=whole, cut=NS(F=F, vertex_map=np.array(ids)))
+    >>> a = piece([0, 1, 2], [[0, 0], [1, 0], [0, 1]])
+    >>> b = piece([1, 3, 2], [[1, 0], [1, 1], [0, 1]])
+    >>> c = piece([1, 4, 5], [[1, 0], [2, 0], [2, 1]], method="hlle")
+    >>> map_groups([a, c, b])
+    [[0, 2], [1]]
+    >>> b.param.UV[0] = [1.5, 0.0]; b.param.UV[2] = [0.0, 1.5]  # another map: apart
+    >>> map_groups([a, c, b])
+    [[0], [1], [2]]
+    """
+    from ..parameterization.split import PACKING_METHODS
+
+    candidates: dict = {}
+    for i, c in enumerate(charts):
+        attempts = c.param.attempts or [{}]
+        one_map = attempts[-1].get("method") in PACKING_METHODS and c.chart_cut is not None
+        candidates.setdefault(("map", id(c.chart_cut)) if one_map else ("chart", i), []).append(i)
+    groups = []
+    for key, members in candidates.items():
+        if key[0] == "chart" or len(members) == 1:
+            groups.append(members)
+            continue
+        corners = []  # (mesh vertex, u, v) of every piece: equal where they touch in one map
+        for i in members:
+            c = charts[i]
+            used = np.unique(np.asarray(c.cut.F))
+            ids = np.asarray(c.cut.vertex_map)[used]
+            uv = _uv(c)[used]
+            corners.append(set(zip(ids.tolist(), uv[:, 0].tolist(), uv[:, 1].tolist(),
+                                   strict=True)))
+        n = len(members)
+        touch = np.array([[p, q] for p in range(n) for q in range(p + 1, n)
+                          if not corners[p].isdisjoint(corners[q])], dtype=np.int64).reshape(-1, 2)
+        A = sp.coo_matrix((np.ones(len(touch)), (touch[:, 0], touch[:, 1])), shape=(n, n))
+        label = connected_components(A, directed=False)[1]
+        groups.extend([members[p] for p in np.flatnonzero(label == k)] for k in np.unique(label))
+    return sorted(groups, key=lambda g: g[0])
 
 
 def corner_uv(V: ArrayLike, F: ArrayLike, charts: Iterable[Chart]) -> np.ndarray:
@@ -107,13 +185,16 @@ def corner_uv(V: ArrayLike, F: ArrayLike, charts: Iterable[Chart]) -> np.ndarray
     """
     V = np.asarray(V, dtype=np.float64)
     UVc = np.zeros((np.shape(F)[0], 3, 2))
-    for c in drawable_charts(charts):
-        UVc[np.asarray(c.faces, dtype=np.int64)] = _normalised_uv(V, c)[c.cut.F]
+    charts = drawable_charts(charts)
+    for g in map_groups(charts):  # pieces of one map: one scale, so one checker size
+        for i, uv in zip(g, _normalised_group(V, [charts[i] for i in g]), strict=True):
+            UVc[np.asarray(charts[i].faces, dtype=np.int64)] = uv[charts[i].cut.F]
     return UVc.reshape(-1, 2)
 
 
 def chart_layout(V: ArrayLike, charts: Sequence[Chart]) -> list[np.ndarray]:
-    """Place every chart's normalised UV side by side in rows (largest first).
+    """Place every chart's normalised UV side by side in rows (largest first); the pieces of a
+    chart cut for packing together, as the map they come from (:func:`map_groups`).
 
     Parameters
     ----------
@@ -128,12 +209,16 @@ def chart_layout(V: ArrayLike, charts: Sequence[Chart]) -> list[np.ndarray]:
         Translated UV per chart (same order as ``charts``), not overlapping each other.
     """
     V = np.asarray(V, dtype=np.float64)
-    uvs = [_normalised_uv(V, c) for c in charts]
-    if not uvs:
+    if not charts:
         return []
+    groups = map_groups(charts)
+    uvs: list = [None] * len(charts)
+    for g in groups:  # pieces of one map are drawn together, as the map they come from
+        for i, uv in zip(g, _normalised_group(V, [charts[i] for i in g]), strict=True):
+            uvs[i] = uv
     ext = []
-    for c, uv in zip(charts, uvs, strict=True):
-        used = uv[np.unique(c.cut.F)]
+    for g in groups:
+        used = np.concatenate([uvs[i][np.unique(charts[i].cut.F)] for i in g])
         ext.append((used.min(axis=0), used.max(axis=0)))
     sizes = np.array([hi - lo for lo, hi in ext])
     gap = CHART_GAP * float(sizes.max())
@@ -142,12 +227,13 @@ def chart_layout(V: ArrayLike, charts: Sequence[Chart]) -> list[np.ndarray]:
     order = np.argsort(-sizes[:, 1], kind="stable")
     out: list[np.ndarray] = [None] * len(uvs)  # type: ignore[list-item]
     x = y = row_h = 0.0
-    for i in order:
-        w, h = sizes[i]
+    for j in order:
+        w, h = sizes[j]
         if x > 0 and x + w > row_w:
             x, y, row_h = 0.0, y - row_h - gap, 0.0
-        lo, hi = ext[i]
-        out[i] = uvs[i] - [lo[0], hi[1]] + [x, y]
+        lo, hi = ext[j]
+        for i in groups[j]:
+            out[i] = uvs[i] - [lo[0], hi[1]] + [x, y]
         x += w + gap
         row_h = max(row_h, h)
     return out

@@ -215,9 +215,9 @@ def test_run_subcommand(tmp_path):
 
 
 def test_run_gutter_option(tmp_path, capsys, can_mesh):
-    """``--gutter``: the gap between charts as a fraction of the atlas side; a wider gutter
-    fills less; out of [0, 0.5) it is refused before any work (argparse's exit code 2; the
-    library's MeshError)."""
+    """``--gutter``: the gap between charts relative to the atlas side; a wider gutter fills
+    less; out of [0, 0.1] (the packer fails from about 0.2) or not a number, it is refused
+    before any work (argparse's exit code 2; the library's MeshError)."""
     from igl_heatseg.cli import main
 
     V, F = can()
@@ -232,10 +232,11 @@ def test_run_gutter_option(tmp_path, capsys, can_mesh):
     assert reps["0.05"]["atlas_fill"] < reps["0.001"]["atlas_fill"]
     capsys.readouterr()
     with pytest.raises(SystemExit) as e:
-        main(["run", str(mesh_path), "-o", str(tmp_path / "bad"), "--gutter", "0.5"])
-    assert e.value.code == 2 and "must be in [0, 0.5)" in capsys.readouterr().err
-    with pytest.raises(MeshError, match="gutter"):
-        run_pipeline(can_mesh, gutter=float("nan"))
+        main(["run", str(mesh_path), "-o", str(tmp_path / "bad"), "--gutter", "0.2"])
+    assert e.value.code == 2 and "must be in [0, 0.1]" in capsys.readouterr().err
+    for bad in (float("nan"), 0.2, True, "0.01"):
+        with pytest.raises(MeshError, match="gutter"):
+            run_pipeline(can_mesh, gutter=bad)
 
 
 def test_splitting_user_path_is_reported_not_fatal(can_mesh):

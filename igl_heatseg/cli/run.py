@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..batch.jobs import run_file, write_pictures
-from ..parameterization.atlas import GUTTER_DEFAULT
+from ..parameterization.atlas import GUTTER_DEFAULT, GUTTER_MAX
 from .cad import cad_summary
 from .common import (
     add_progress_argument,
@@ -89,13 +89,13 @@ def _run_file(args: argparse.Namespace):
 
 
 def _gutter(text: str) -> float:
-    """``--gutter``: a number in ``[0, 0.5)``."""
+    """``--gutter``: a number in ``[0, GUTTER_MAX]``."""
     try:
         g = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0 <= g < 0.5:
-        raise argparse.ArgumentTypeError(f"must be in [0, 0.5), got {text}")
+    if not 0 <= g <= GUTTER_MAX:
+        raise argparse.ArgumentTypeError(f"must be in [0, {GUTTER_MAX}], got {text}")
     return g
 
 
@@ -148,8 +148,8 @@ def register(subparsers) -> None:
         type=_gutter,
         default=None,
         metavar="G",
-        help="gap between charts in the atlas, a fraction of its side in [0, 0.5) (default "
-        f"{GUTTER_DEFAULT}: 4 texels of a 1024 px texture)",
+        help=f"gap between charts in the atlas, relative to its side, in [0, {GUTTER_MAX}] "
+        f"(default {GUTTER_DEFAULT}: about 4 texels of a 1024 px texture)",
     )
     p.add_argument(
         "--no-pictures",

@@ -40,12 +40,17 @@ __all__ = [
     "boxes_overlap",
     "atlas_corner_uv",
     "GUTTER_DEFAULT",
+    "GUTTER_MAX",
 ]
 
 log = logging.getLogger(__name__)
 
 #: Gap between charts, as a fraction of the atlas side (4 texels of a 1024 px texture, 2 of 512).
 GUTTER_DEFAULT: float = 0.004
+
+#: Largest gutter the pipeline and the CLI accept: the outline packer fails from about 0.2
+#: (a chart fitting nowhere, or memory), measured on small meshes; 0.1 packs.
+GUTTER_MAX: float = 0.1
 
 #: Shelf widths tried, as multiples of ``sqrt(sum of box areas)``.
 _SHELF_WIDTH_FACTORS = np.linspace(0.7, 2.5, 37)

@@ -7,14 +7,14 @@ fits into a gap.
 
 The body of a chart is found by a morphological *opening* of its map: the union of the discs
 of radius ``r`` that fit inside the chart's image (rasterised, :data:`SPIKE_RASTER` pixels
-across the square root of its area).  A face whose centroid lies outside the body is a spike
-face.  Edge-connected spike faces form a spike; a spike no longer than :data:`SPIKE_TOOTH`
-times ``r`` (a tooth of a jagged outline, one or two triangles) stays with the body.  The
-radii tried are :data:`SPIKE_RADII` times the square root of the chart's area; the pieces of
-each must all be disks.  The split kept is the one with the least *packing cost*: the area of
-the pieces' convex hulls plus a band of half the gutter around each hull (the area a piece
-keeps other charts out of, and its share of the gutters), when it is at least
-:data:`SPIKE_MIN_GAIN` below the whole chart's.
+across the square root of its area, at most :data:`SPIKE_MAX_PIXELS` in all).  A face whose
+centroid lies outside the body is a spike face.  Edge-connected spike faces form a spike; a
+spike no longer than :data:`SPIKE_TOOTH` times ``r`` (a tooth of a jagged outline, one or two
+triangles) stays with the body.  The radii tried are :data:`SPIKE_RADII` times the square root
+of the chart's area; the pieces of each must all be disks.  The split kept is the one with the
+least *packing cost*: the area of the pieces' convex hulls plus a band of half the gutter
+around each hull (the area a piece keeps other charts out of, and its share of the gutters),
+when it is at least :data:`SPIKE_MIN_GAIN` below the whole chart's.
 
 Every piece keeps the chart's map (see :func:`~.split.peel_for_packing`), so it stays
 bijective with the same distortion.
@@ -48,6 +48,9 @@ SPIKE_MIN_GAIN: float = 0.05
 #: Raster resolution of the opening: pixels across the square root of the chart's area.
 SPIKE_RASTER: int = 96
 
+#: ... and at most this many pixels in the raster of a chart's box.
+SPIKE_MAX_PIXELS: int = 1_000_000
+
 
 def packing_cost(UV: np.ndarray, F: np.ndarray, gap: float) -> float:
     """Area a chart takes in a packed atlas, estimated from its convex hull.
@@ -75,10 +78,12 @@ def packing_cost(UV: np.ndarray, F: np.ndarray, gap: float) -> float:
     (1.0, 1.207854)
     """
     P = UV[np.unique(F)]
+    if len(P) == 0:
+        return 0.0
     try:
         hull = ConvexHull(P)
-    except QhullError:  # all points on a line: no area to keep others out of
-        return float(np.ptp(P, axis=0).max() * gap + np.pi * gap * gap / 4)
+    except QhullError:  # all points on a line (its length: the box's diagonal): no area
+        return float(np.hypot(*np.ptp(P, axis=0)) * gap + np.pi * gap * gap / 4)
     # in 2-D, ConvexHull's ``volume`` is the area and ``area`` the perimeter
     return float(hull.volume + hull.area * gap / 2 + np.pi * gap * gap / 4)
 
@@ -151,7 +156,9 @@ def split_spikes(UV: np.ndarray, F: np.ndarray, gap: float) -> list | None:
     >>> split_spikes(UV[:4], np.array([[0, 1, 2], [0, 2, 3]]), 0.1) is None  # no spike
     True
     """
-    F = np.asarray(F, dtype=np.int64)
+    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
+    if len(F) < 2:
+        return None
     used, G = np.unique(F, return_inverse=True)
     G = G.reshape(-1, 3)
     P = np.asarray(UV, dtype=np.float64)[used]
@@ -161,7 +168,9 @@ def split_spikes(UV: np.ndarray, F: np.ndarray, gap: float) -> list | None:
         return None
     topo = edge_topology(G)
     ef = topo.EF[topo.edge_face_count == 2]
-    t = np.sqrt(area) / SPIKE_RASTER
+    # pixel: SPIKE_RASTER across the square root of the area, coarser when the box would
+    # take more than SPIKE_MAX_PIXELS (a long strip lying diagonally in its map)
+    t = max(np.sqrt(area) / SPIKE_RASTER, np.sqrt(np.prod(np.ptp(P, axis=0)) / SPIKE_MAX_PIXELS))
     pad = 2
     M = rasterize_chart(P, G, t, pad)
     D = ndimage.distance_transform_edt(M, sampling=t)

@@ -32,12 +32,14 @@ parameterized: its report entry says so (``"parameterized": false``) and its cor
 
 from __future__ import annotations
 
+import numbers
 import time
 from typing import Literal, Sequence
 
 from ..errors import MeshError
 from ..mesh.checks import CleanMesh
 from ..mesh.geometry import face_areas
+from ..parameterization.atlas import GUTTER_MAX
 from ..parameterization.chart import HLLE_SKIP_CURVATURE
 from ..parameterization.split import SPLIT_SD_MAX
 from ..segmentation.api import segment_with_mode
@@ -106,8 +108,10 @@ def run_pipeline(
     fallback : str
         Passed to ``parameterize_chart``.
     gutter : float, optional
-        Gap between charts in the atlas, a fraction of its side in ``[0, 0.5)`` (default
-        :data:`igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`, 4 texels at 1024 px).
+        Gap between charts in the atlas, relative to its side (as for
+        :func:`~igl_heatseg.parameterization.atlas.pack_charts`), from 0 to
+        :data:`~igl_heatseg.parameterization.atlas.GUTTER_MAX` (default
+        :data:`~igl_heatseg.parameterization.atlas.GUTTER_DEFAULT`, about 4 texels at 1024 px).
     progress : callable(stage, fraction), optional
     solver : {"fast", "exact"}
         Heat solver for the segmentation (see :func:`igl_heatseg.segmentation.paper.segment_mesh`).
@@ -155,8 +159,11 @@ def run_pipeline(
         raise MeshError(f"`cut` must be 'auto' or 'none', got {cut!r}")
     if energy not in ("auto", "hlle", "curved"):
         raise MeshError(f"`energy` must be 'auto', 'hlle' or 'curved', got {energy!r}")
-    if gutter is not None and not (isinstance(gutter, (int, float)) and 0 <= gutter < 0.5):
-        raise MeshError(f"`gutter` must be a number in [0, 0.5), got {gutter!r}")
+    if gutter is not None and (
+        isinstance(gutter, bool) or not isinstance(gutter, numbers.Real)
+        or not 0 <= gutter <= GUTTER_MAX
+    ):
+        raise MeshError(f"`gutter` must be a number in [0, {GUTTER_MAX}], got {gutter!r}")
     resolve_params(mode, theta, eps)  # before the (long) segmentation
     t0 = time.perf_counter()
     check_cut_paths(mesh, cut_paths)  # before the (long) segmentation

@@ -493,8 +493,8 @@ def _packable(ch: Chart) -> bool:
 
 
 def _fill(charts: list, gutter: float) -> float:
-    """Atlas fill of :func:`pack`'s layout of ``charts`` with the default gutter (0 when none
-    can be packed)."""
+    """Atlas fill of :func:`pack`'s layout of ``charts`` with ``gutter`` (0 when none can be
+    packed)."""
     done = [ch for ch in charts if ch.param is not None and _packable(ch)]
     if not done:
         return 0.0
@@ -512,7 +512,8 @@ def _pack_once(done: list, gutter: float) -> PackedAtlas:
     uvs, faces = [ch.param.UV for ch in done], [ch.cut.F for ch in done]
     areas = np.array([ch.area for ch in done], dtype=np.float64)
     h = hashlib.blake2b(np.float64(gutter).tobytes() + areas.tobytes(), digest_size=16)
-    for UV, F in zip(uvs, faces, strict=True):
+    for UV, F in zip(uvs, faces, strict=True):  # shapes too: the bytes alone do not split
+        h.update(np.array([*np.shape(UV), *np.shape(F)], dtype=np.int64).tobytes())
         h.update(np.ascontiguousarray(UV, dtype=np.float64).tobytes())
         h.update(np.ascontiguousarray(F, dtype=np.int64).tobytes())
     key = h.hexdigest()

@@ -22,14 +22,13 @@ bijective with the same distortion.
 
 from __future__ import annotations
 
+import igl
 import numpy as np
-import scipy.sparse as sp
 from scipy import ndimage
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
 from ..mesh.geometry import uv_areas
-from ..mesh.topology import edge_topology
+from ..mesh.topology import label_pieces
 from .cut import chart_topology
 from .outline_pack import rasterize_chart
 
@@ -88,16 +87,9 @@ def packing_cost(UV: np.ndarray, F: np.ndarray, gap: float) -> float:
     return float(hull.volume + hull.area * gap / 2 + np.pi * gap * gap / 4)
 
 
-def _components(m: int, side: np.ndarray, ef: np.ndarray) -> np.ndarray:
-    """Component id of every face: faces edge-connected on the same ``side`` (bool per face)."""
-    keep = side[ef[:, 0]] == side[ef[:, 1]]
-    A = sp.csr_matrix((np.ones(int(keep.sum())), (ef[keep, 0], ef[keep, 1])), shape=(m, m))
-    return connected_components(A, directed=False)[1]
-
-
 def _open(
     P: np.ndarray, F: np.ndarray, D: np.ndarray, pix: np.ndarray, t: float, r: float,
-    ef: np.ndarray,
+    TT: np.ndarray,
 ) -> list | None:
     """Pieces of the chart (``P``: its map, minimum at the origin; ``D``: each pixel's
     distance to the outside of the chart's raster of pixel ``t``, in the units of ``P``;
@@ -110,14 +102,14 @@ def _open(
     inside = body[pix[:, 1], pix[:, 0]]
     if inside.all():
         return None
-    comp = _components(len(F), inside, ef)
+    comp = label_pieces(F, inside, TT)
     for c in np.unique(comp[~inside]):  # a tooth stays with the body
         spike = np.flatnonzero(comp == c)
         if np.hypot(*np.ptp(P[np.unique(F[spike])], axis=0)) < SPIKE_TOOTH * r:
             inside[spike] = True
     if inside.all():
         return None
-    comp = _components(len(F), inside, ef)
+    comp = label_pieces(F, inside, TT)
     pieces = [np.flatnonzero(comp == c) for c in np.unique(comp)]
     if not all(chart_topology(F[p], name="piece").is_disk for p in pieces):
         return None
@@ -166,8 +158,7 @@ def split_spikes(UV: np.ndarray, F: np.ndarray, gap: float) -> list | None:
     area = float(np.abs(uv_areas(P, G)).sum())
     if not area > 0 or len(G) < 2:
         return None
-    topo = edge_topology(G)
-    ef = topo.EF[topo.edge_face_count == 2]
+    TT = igl.triangle_triangle_adjacency(G)[0]
     # pixel: SPIKE_RASTER across the square root of the area, coarser when the box would
     # take more than SPIKE_MAX_PIXELS (a long strip lying diagonally in its map)
     t = max(np.sqrt(area) / SPIKE_RASTER, np.sqrt(np.prod(np.ptp(P, axis=0)) / SPIKE_MAX_PIXELS))
@@ -179,7 +170,7 @@ def split_spikes(UV: np.ndarray, F: np.ndarray, gap: float) -> list | None:
     whole = packing_cost(P, G, gap)
     best, best_cost = None, whole * (1 - SPIKE_MIN_GAIN)
     for frac in SPIKE_RADII:
-        pieces = _open(P, G, D, pix, t, frac * np.sqrt(area), ef)
+        pieces = _open(P, G, D, pix, t, frac * np.sqrt(area), TT)
         if pieces is None:
             continue
         cost = sum(packing_cost(P, G[p], gap) for p in pieces)

@@ -614,15 +614,9 @@ def cut_for_packing(
     >>> len(out), all(q.bijective for _, _, q in out)
     (5, True)
     """
-    whole = [(np.arange(len(res.F)), res, param)]
-    if not param.bijective:
-        return whole
-    uv_area = float(np.abs(uv_areas(param.UV, res.F)).sum())
-    scale = np.sqrt(_area(res) / max(uv_area, 1e-300))  # 3D length per UV length
-    pieces = split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)
-    if pieces is None:
-        return whole
-    return _restricted(res, param, pieces, name, PACKING_METHODS[0]) or whole
+    out = _split_keeping_map(res, param, name, PACKING_METHODS[0], lambda scale: (
+        split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)))
+    return out or [(np.arange(len(res.F)), res, param)]
 
 
 def peel_for_packing(
@@ -665,18 +659,23 @@ def peel_for_packing(
     ([3, 1], True)
     """
     whole = [(np.arange(len(res.F)), res, param)]
-    if not param.bijective:
-        return whole
-    uv_area = float(np.abs(uv_areas(param.UV, res.F)).sum())
-    scale = np.sqrt(_area(res) / max(uv_area, 1e-300))  # 3D length per UV length
-    pieces = split_spikes(param.UV, res.F, gap / scale)
-    if pieces is None:
-        return whole
-    out = _restricted(res, param, pieces, name, PACKING_METHODS[1])
+    out = _split_keeping_map(res, param, name, PACKING_METHODS[1],
+                             lambda scale: split_spikes(param.UV, res.F, gap / scale))
     bound = max(sd_max, param.distortion.get("sym_dirichlet", np.inf))
     if out is None or any(q.distortion.get("sym_dirichlet", np.inf) > bound for *_, q in out):
         return whole  # a sliver alone can be more stretched than its chart on average
     return out
+
+
+def _split_keeping_map(res: CutResult, param, name: str, method: str, choose) -> list | None:
+    """The pieces ``choose(scale)`` picks for a bijectively mapped chart (``scale``: 3D length
+    per UV length; face index arrays or ``None``), the map restricted to each
+    (:func:`_restricted`); ``None`` when the map is not bijective or nothing is cut."""
+    if not param.bijective:
+        return None
+    uv_area = float(np.abs(uv_areas(param.UV, res.F)).sum())
+    pieces = choose(np.sqrt(_area(res) / max(uv_area, 1e-300)))
+    return None if pieces is None else _restricted(res, param, pieces, name, method)
 
 
 def _restricted(res: CutResult, param, pieces: list, name: str, method: str) -> list | None:

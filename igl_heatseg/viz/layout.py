@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from scipy.sparse.csgraph import connected_components
 
 from ..mesh.geometry import face_areas, uv_areas
+from ..parameterization.split import PACKING_METHODS
 
 if TYPE_CHECKING:
     from ..pipeline import Chart
@@ -81,11 +82,6 @@ def _uv(c: Chart) -> np.ndarray:
     return np.asarray(c.param.UV, dtype=np.float64)[:, :2]
 
 
-def _normalised_uv(V: np.ndarray, c: Chart) -> np.ndarray:
-    """The chart's UV centred at its centroid and scaled to the chart's 3D area, (nc, 2)."""
-    return _normalised_group(V, [c])[0]
-
-
 def _normalised_group(V: np.ndarray, cs: list) -> list[np.ndarray]:
     """The UVs of pieces of one map, centred and scaled together to their 3D area."""
     a3 = a2 = 0.0
@@ -99,6 +95,15 @@ def _normalised_group(V: np.ndarray, cs: list) -> list[np.ndarray]:
     centre = np.concatenate(cents).mean(axis=0)
     # rows of vertices F does not use are NaN: zeros
     return [np.nan_to_num((_uv(c) - centre) * s, nan=0.0) for c in cs]
+
+
+def _group_uvs(V: np.ndarray, charts: list, groups: list) -> list[np.ndarray]:
+    """Every chart's normalised UV, the charts of a group (:func:`map_groups`) together."""
+    uvs: list = [None] * len(charts)
+    for g in groups:
+        for i, uv in zip(g, _normalised_group(V, [charts[i] for i in g]), strict=True):
+            uvs[i] = uv
+    return uvs
 
 
 def map_groups(charts: Sequence[Chart]) -> list[list[int]]:
@@ -138,8 +143,6 @@ def map_groups(charts: Sequence[Chart]) -> list[list[int]]:
     >>> map_groups([a, c, b])
     [[0], [1], [2]]
     """
-    from ..parameterization.split import PACKING_METHODS
-
     candidates: dict = {}
     for i, c in enumerate(charts):
         attempts = c.param.attempts or [{}]
@@ -186,9 +189,9 @@ def corner_uv(V: ArrayLike, F: ArrayLike, charts: Iterable[Chart]) -> np.ndarray
     V = np.asarray(V, dtype=np.float64)
     UVc = np.zeros((np.shape(F)[0], 3, 2))
     charts = drawable_charts(charts)
-    for g in map_groups(charts):  # pieces of one map: one scale, so one checker size
-        for i, uv in zip(g, _normalised_group(V, [charts[i] for i in g]), strict=True):
-            UVc[np.asarray(charts[i].faces, dtype=np.int64)] = uv[charts[i].cut.F]
+    # pieces of one map: one scale, so one checker size
+    for c, uv in zip(charts, _group_uvs(V, charts, map_groups(charts)), strict=True):
+        UVc[np.asarray(c.faces, dtype=np.int64)] = uv[c.cut.F]
     return UVc.reshape(-1, 2)
 
 
@@ -211,11 +214,8 @@ def chart_layout(V: ArrayLike, charts: Sequence[Chart]) -> list[np.ndarray]:
     V = np.asarray(V, dtype=np.float64)
     if not charts:
         return []
-    groups = map_groups(charts)
-    uvs: list = [None] * len(charts)
-    for g in groups:  # pieces of one map are drawn together, as the map they come from
-        for i, uv in zip(g, _normalised_group(V, [charts[i] for i in g]), strict=True):
-            uvs[i] = uv
+    groups = map_groups(charts)  # pieces of one map are drawn together, as that map
+    uvs = _group_uvs(V, charts, groups)
     ext = []
     for g in groups:
         used = np.concatenate([uvs[i][np.unique(charts[i].cut.F)] for i in g])

@@ -167,6 +167,32 @@ def test_region_growing_gives_up_on_a_smooth_freeform_patch(monkeypatch):
     assert len(grown) < n_full / 3
 
 
+def test_a_face_set_left_whole_is_not_split_again(monkeypatch):
+    """The second split pass skips the segments the first one left whole (a smooth freeform
+    scan spent half its refinement growing them again), and the labels are the same as
+    without that memory."""
+    from scipy.spatial import Delaunay
+
+    import igl_heatseg.surfaces.refine as R
+
+    x, y = (a.ravel() for a in np.meshgrid(np.linspace(-1, 1, 15), np.linspace(-1, 1, 15)))
+    V = np.c_[x, y, 0.3 * np.sin(2 * x) * np.cos(3 * y)]
+    F = Delaunay(V[:, :2]).simplices.astype(np.int64)
+    labels = (V[F].mean(axis=1)[:, 0] > 0).astype(np.int64)  # two freeform halves
+    grown, grow = [], R.grow_regions
+    monkeypatch.setattr(R, "grow_regions", lambda V, F, faces, *a: grown.append(
+        tuple(faces.tolist())) or grow(V, F, faces, *a))
+    r = R.refine_segmentation(V, F, labels, 1e-3)
+    assert len(grown) == len(set(grown)) >= 2, "a face set grown twice"
+    assert all(s.kind == "freeform" for s in r.surfaces)
+    split = R._split
+    monkeypatch.setattr(R, "_split", lambda *a: split(*a[:-1], set()))  # no memory
+    grown.clear()
+    r2 = R.refine_segmentation(V, F, labels, 1e-3)
+    assert len(grown) > len(set(grown))
+    assert np.array_equal(r.labels, r2.labels)
+
+
 def test_chamfers_one_triangle_wide_are_whole_cones(data_dir):
     """A generated nut (data/nut_s3000: 13 B-Rep faces) has 45-degree chamfers on its bore one
     triangle wide, with no vertex inside them. The heat fields label each chamfer triangle like

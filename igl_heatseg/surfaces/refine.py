@@ -28,6 +28,7 @@ true surface, its face centroids do not (they sit a chord's sagitta inside a cur
 
 from __future__ import annotations
 
+import hashlib
 import heapq
 import logging
 import math
@@ -603,12 +604,17 @@ def _face_connected(F, labels, TT=None) -> np.ndarray:
     return label_pieces(F, labels, _adjacency(F) if TT is None else TT)
 
 
-def _split(V, F, faces, tol, FN, TT, W, ratio, exact):
+def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
     """Region growing, then on a noisy mesh RANSAC
     (:func:`~igl_heatseg.surfaces.split.ransac_regions`), until one finds real faces
-    (:func:`~igl_heatseg.surfaces.split.real_split`); else ``(None, None)``. On an exact
+    (:func:`~igl_heatseg.surfaces.split.real_split`); else ``(None, None)``, and the face set's
+    digest goes into ``unsplit``, whose sets are not tried again (the split
+    is deterministic; a smooth scan's second pass repeated half its refinement). On an exact
     tessellation growth is held to round-off and does not stall on small holes, and RANSAC
     shattered freeform blends (fandisk robust: 36 -> 87 segments, 50 one-face)."""
+    key = hashlib.blake2b(np.asarray(faces, dtype=np.int64).tobytes(), digest_size=16).digest()
+    if key in unsplit:
+        return None, None
     for how in ("grow",) if exact else ("grow", "ransac"):
         if how == "grow":
             sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact)
@@ -620,10 +626,11 @@ def _split(V, F, faces, tol, FN, TT, W, ratio, exact):
             parts, part_fits = fold_weak(V, F, TT, tol, W, FN, parts, part_fits, how == "ransac")
         if len(parts) > 1 and real_split(V, F, parts, part_fits, tol, ratio, not exact):
             return parts, part_fits
+    unsplit.add(key)
     return None, None
 
 
-def _split_unexplained(V, F, labels, fits, tol, TT, W, FN, ratio, exact) -> int:
+def _split_unexplained(V, F, labels, fits, tol, TT, W, FN, ratio, exact, unsplit) -> int:
     """Split again the segments that no surface explains after the merges, moves and cuts
     (:func:`_split`; they mix faces the first split never saw together); labels and fits in
     place. Returns the number of segments split."""
@@ -633,7 +640,7 @@ def _split_unexplained(V, F, labels, fits, tol, TT, W, FN, ratio, exact) -> int:
         faces = np.flatnonzero(labels == k)
         if len(faces) < 2 * MIN_REGION_FACES:
             continue
-        parts, part_fits = _split(V, F, faces, tol, FN, TT, W, ratio, exact)
+        parts, part_fits = _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit)
         for r, (part, fr) in enumerate(zip(parts or [], part_fits or [], strict=True)):
             lab = k if r == 0 else nxt
             nxt += r > 0
@@ -707,6 +714,7 @@ def refine_segmentation(
     ks = np.unique(labels).tolist()
     fits = {}
     n_split = 0
+    unsplit: set = set()  # the face sets _split left whole
     nxt = max(ks) + 1
     for i, k in enumerate(ks):
         progress("fit", i / max(len(ks), 1))
@@ -723,7 +731,7 @@ def refine_segmentation(
                 if explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
         if split and not explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
-            parts, part_fits = _split(V, F, faces, tol, FN, TT, W, split_ratio, exact)
+            parts, part_fits = _split(V, F, faces, tol, FN, TT, W, split_ratio, exact, unsplit)
             if parts is not None:
                 n_split += 1
                 for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):
@@ -765,7 +773,8 @@ def refine_segmentation(
             merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
     t = time.perf_counter()
-    if split and _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact):
+    if split and _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
+                                    unsplit):
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
         merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact) if merge else 0
     timings["split_again"] = time.perf_counter() - t

@@ -438,6 +438,23 @@ def test_batch_on_a_scheduler_the_test_starts(meshes, tmp_path):
                 p.wait()
 
 
+def test_batch_mode_defaults_to_the_commands_own(meshes, client, tmp_path):
+    """`batch --command cad` segments in robust mode, as `igl-heatseg cad` does (it used paper
+    mode: 502 faceted segments on a pipe elbow that robust mode gives 10); segment keeps paper
+    mode. The mode used is recorded in summary.json and in each report."""
+    pytest.importorskip("OCP")
+    root, _ = meshes
+    box = root / "boxes" / "b1.off"
+    for command, mode in (("segment", "paper"), ("cad", "robust")):
+        out = tmp_path / command
+        res = run_batch([box], out, command=command, client=client, pictures=False,
+                        progress=False)
+        assert not res.failed
+        assert json.loads((out / "summary.json").read_text())["options"]["mode"] == mode
+        (report,) = out.rglob("report.json")
+        assert json.loads(report.read_text())["mode"] == mode
+
+
 def test_cli_batch_is_registered_and_reports_bad_arguments(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "missing"), "-o", str(tmp_path / "o")]) == 2
     assert "no such file" in capsys.readouterr().err

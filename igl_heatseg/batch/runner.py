@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
+import inspect
 import logging
 import os
 import re
@@ -241,7 +242,7 @@ def run_batch(
     *,
     scheduler: str | None = None,
     workers: int | None = None,
-    mode: str = "paper",
+    mode: str | None = None,
     options: dict | None = None,
     memory_limit="4GB",
     timeout: float | None = 600.0,
@@ -262,7 +263,8 @@ def run_batch(
         ``OUT/index.html``. On a cluster, inputs and OUT must be on a filesystem every worker
         sees under the same path.
     command : str
-        Job kind, a key of :data:`~igl_heatseg.batch.jobs.JOB_KINDS` (``segment``, ``run``).
+        Job kind, a key of :data:`~igl_heatseg.batch.jobs.JOB_KINDS` (``segment``, ``run``,
+        ``cad``).
     client : dask.distributed.Client, optional
         Run on this client (left open). Otherwise on ``scheduler``, or on a new LocalCluster of
         ``workers`` single-threaded worker processes (closed at the end).
@@ -270,7 +272,9 @@ def run_batch(
         Scheduler address, ``tcp://host:8786``.
     workers : int, optional
         LocalCluster size (default: the CPUs this process may use).
-    mode : {"paper", "robust"}
+    mode : {"paper", "robust"}, optional
+        Segmentation mode; default: the command's own (``paper`` for ``segment`` and ``run``,
+        ``robust`` for ``cad``, as on the command line).
     options : dict, optional
         More options of the job kind (``theta``, ``eps``, ``solver``, ``energy``, ``cut``).
     memory_limit : str or int or None
@@ -313,6 +317,8 @@ def run_batch(
     meshes = discover(inputs, exclude=out)
     if not meshes:
         raise ValueError("no mesh found in the inputs (" + ", ".join(map(str, inputs)) + ")")
+    if mode is None:  # the single-mesh command's own default
+        mode = inspect.signature(kind.run).parameters["mode"].default
     opts = {"mode": mode, "pictures": pictures}
     opts.update(options or {})
     t0 = time.perf_counter()

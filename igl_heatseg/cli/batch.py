@@ -58,10 +58,16 @@ def register(subparsers) -> None:
         dest="command_kind",
         choices=sorted(JOB_KINDS),
         default="segment",
-        help="what to do with each mesh: segment (default) or run (segment, cut, parameterize, "
-        "pack, pictures)",
+        help="what to do with each mesh: segment (default), run (segment, cut, parameterize, "
+        "pack, pictures) or cad (segment, fit, B-Rep as STEP)",
     )
-    p.add_argument("--mode", choices=MODES, default="paper", help="segmentation mode")
+    p.add_argument(
+        "--mode",
+        choices=MODES,
+        default=None,
+        help="segmentation mode (default: the command's own: paper for segment and run, "
+        "robust for cad)",
+    )
     p.add_argument(
         "--workers",
         type=int,

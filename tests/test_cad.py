@@ -639,9 +639,12 @@ def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypat
         return {2} if len(calls) == 1 else real(shape, faces, *args)
 
     monkeypatch.setattr(build_mod, "_invalid_segments", first_side_invalid)
+    moved, samples = [], build_mod._samples
+    monkeypatch.setattr(build_mod, "_samples", lambda P: moved.append(len(P)) or samples(P))
     V, F, labels = box_mesh(2)
     res = build_brep(V, F, labels, box_planes())
     assert calls == [6, 5 + 8]  # one rebuild: side 2 as its 8 triangles
+    assert len(moved) == 12 + 4  # the rebuild moves again only the 4 edges along side 2
     assert res.to_report()["not_built"] == [2] and not res.faceted_model
     assert "BRepCheck" in res.faces[2]["reason"] and "BRepCheck" in res.message
     fid = res.fidelity
@@ -948,10 +951,15 @@ def test_model_broken_by_a_bspline_stand_in_is_built_again_without_it(monkeypatc
         return real(shape, *args, **kwargs)
 
     monkeypatch.setattr(build_mod, "_invalid_segments", bspline_breaks_it)
+    fitted, surface_for = [], build_mod._surface_for
+    monkeypatch.setattr(build_mod, "_surface_for", lambda a, *r, **k: fitted.append(a) or
+                        surface_for(a, *r, **k))
     V, F, labels, surfs = _wrong_side_plane()
     res = build_brep(V, F, labels, surfs)
     assert not res.faceted_model
     assert [f["index"] for f in res.not_built] == [2]
+    # the second build fits again only the segment that was a B-spline in the first
+    assert sorted(fitted) == sorted(list(range(len(surfs))) + [2])
     assert res.faces[2]["reason"].startswith("surface deviates")
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
 

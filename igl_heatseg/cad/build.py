@@ -272,23 +272,34 @@ def _seam_polyline(chain, V, projs, ctx):
 
 
 def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
-    """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam)."""
-    ps = [projs[s] for s in (chain.left, chain.right) if s >= 0 and projs[s] is not None]
-    R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
-    P, orig = _samples(V[chain.verts] if R is None else R)
-    if R is None:
-        P[0], P[-1] = pos[int(chain.verts[0])], pos[int(chain.verts[-1])]
-    lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
-    if ps and len(P) > 2:
-        X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
-        ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
-                                          <= _move_limit(ctx, (chain.left, chain.right)))
-        P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
-    if R is None:
+    """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam).
+    Kept in ``ctx["point_cache"]`` by the chain, its ends' positions and its sides' surfaces:
+    a rebuild moves again only the chains along the segments it faceted."""
+    sides = (chain.left, chain.right)
+    ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
+    a, b = int(chain.verts[0]), int(chain.verts[-1])
+    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(),
+           *(id(projs[s]) if s >= 0 and projs[s] is not None else None for s in sides))
+    cache = ctx.setdefault("point_cache", {})
+    if key not in cache:
+        R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
+        P, orig = _samples(V[chain.verts] if R is None else R)
+        if R is None:
+            P[0], P[-1] = pos[a], pos[b]
+        lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
+        if ps and len(P) > 2:
+            X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
+            ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
+                                              <= _move_limit(ctx, sides))
+            P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
+        cache[key] = P, orig, R is not None
+    P, orig, restarted = cache[key]
+    P = P.copy()
+    if not restarted:
         snap[chain.verts] = P[orig]
     else:
         P[-1] = P[0]
-        _move_vertex(int(chain.verts[0]), P[0], pos, vertices, ctx)
+        _move_vertex(a, P[0], pos, vertices, ctx)
     return P
 
 
@@ -610,7 +621,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     """Faces built, sewn and checked, with the rebuilds of :func:`build_brep`: (shape, status,
     sewing tolerance, fully faceted?, message, solid?)."""
     skip: dict = {}  # segments faceted after sewing: failed BRepCheck, or along free edges
-    cache: dict = {}
+    cache = ctx.setdefault("surface_cache", {})  # shared by the builds with and without B-splines
     neighbours = segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it
     try:
@@ -700,32 +711,37 @@ def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None):
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):
     """Surfaces, vertices, edges and faces: (faces, per-segment status, sewing tolerance,
     the segment of each face). Segments in ``skip`` (index -> reason) are faceted; ``cache``
-    keeps the surfaces between calls."""
+    keeps the surfaces between calls (key: segment, and whether an analytic one may become a
+    B-spline); ``timings`` adds up over the calls."""
     k = len(surfaces)
     skip = {} if skip is None else skip
     cache = {} if cache is None else cache
     t = time.perf_counter()
     graph = boundary_graph(V, F, labels, k)
     seg_faces = [np.flatnonzero(labels == a) for a in range(k)]
-    timings["topology"] = time.perf_counter() - t
+    timings["topology"] = timings.get("topology", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     geoms, projs, devs, reasons = [], [], [], []
     for a, s in enumerate(surfaces):
         progress("surfaces", a / k)
-        if a not in cache:
+        key = (a, ctx.get("bspline", True) if s.is_analytic else None)
+        first = cache.get((a, True), (None, None))[1]  # (the projector with B-splines allowed)
+        if key == (a, False) and first is not None and first.surface is not None:
+            cache[key] = cache[(a, True)]  # built on its analytic surface: no B-spline involved
+        if key not in cache:
             try:
-                cache[a] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
+                cache[key] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
                                         bspline=ctx.get("bspline", True),
                                         misfit=ctx["misfit_rms"], notes=ctx["notes"])
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
                 logger.warning("segment %d: surface not built (%s)", a, exc)
-                cache[a] = None, None, math.nan, f"surface not built: {exc}"
-        g, p, d, r = cache[a]
+                cache[key] = None, None, math.nan, f"surface not built: {exc}"
+        g, p, d, r = cache[key]
         if a in skip and r is None:
             g, p, r = None, None, skip[a]
         geoms.append(g), projs.append(p), devs.append(d), reasons.append(r)
-    timings["surfaces"] = time.perf_counter() - t
+    timings["surfaces"] = timings.get("surfaces", 0.0) + time.perf_counter() - t
     # an analytic segment built on a B-spline (its surface deviated) is freeform from here on
     built_as = [("bspline" if p.surface is None else s.kind) if p is not None else None
                 for s, p in zip(surfaces, projs, strict=True)]
@@ -756,7 +772,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
         progress("edges", i / max(len(graph.chains), 1))
         edges.append(_edge(ch, ctx["chain_points"][i], circles.get(i), pos, projs, vertices,
                            ctx, snap))
-    timings["edges"] = time.perf_counter() - t
+    timings["edges"] = timings.get("edges", 0.0) + time.perf_counter() - t
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
     faces, status, owner = [], [], []
@@ -779,5 +795,5 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a]),
                            why_bspline=ctx["notes"].get(a) if built_as[a] == "bspline" and
                            face is not None and ctx["fitted"][a].is_analytic else None))
-    timings["faces"] = time.perf_counter() - t
+    timings["faces"] = timings.get("faces", 0.0) + time.perf_counter() - t
     return faces, status, ctx["sew_tol"], owner

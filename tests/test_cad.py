@@ -403,29 +403,6 @@ def test_wrong_cylinder_gives_faceted_side_in_a_closed_solid(tmp_path):
     assert len(faces_of(read_step(write_step(res.shape, tmp_path / "p.step")))) == fid["faces"]
 
 
-def test_face_that_goes_round_its_torus_more_than_once_is_found(data_dir, monkeypatch):
-    from igl_heatseg.cad.fidelity import wraps_round
-
-    (face,) = faces_of(read_step(data_dir / "wrapped_torus_face.step"))
-    assert wraps_round(face)  # BRepCheck passes it, OCC's mesher does not tessellate it
-    from OCP.BRepCheck import BRepCheck_Analyzer
-
-    assert BRepCheck_Analyzer(face).IsValid()
-    # such a face is faceted, as a face that fails BRepCheck is
-    import igl_heatseg.cad.build as build_mod
-
-    torus = GeomAbs_SurfaceType.GeomAbs_Torus
-    monkeypatch.setattr(build_mod, "wraps_round",
-                        lambda f: BRepAdaptor_Surface(f).GetType() == torus)
-    R, r = 2.0, 0.5
-    phi = np.linspace(0, 2 * np.pi, 25)
-    V, F, labels = revolve(np.c_[R + r * np.cos(phi), r * np.sin(phi)], [0] * 24)
-    res = build_brep(V, F, labels, [Surface("torus", {"center": np.zeros(3), "axis": Z,
-                                                      "major_radius": R, "minor_radius": r})])
-    assert res.faces[0]["status"] == "faceted"
-    assert res.faces[0]["reason"] == "trimmed face goes round its surface more than once"
-
-
 def test_bad_input_raises_mesh_error():
     V, F, labels = box_mesh(2)
     with pytest.raises(MeshError, match="labels"):

@@ -43,7 +43,7 @@ from .blame import blame as _blame  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .components import build_by_component  # noqa: E402
-from .fidelity import brep_fidelity, face_area, face_points, wraps_round  # noqa: E402
+from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
@@ -479,9 +479,8 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         BRepTools.Clean_s(face)
         if off > FREEFORM_OFF_MESH * ctx["tol"]:
             return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
-    if wraps_round(face):
-        return None, "trimmed face goes round its surface more than once"
-    if not abs((area := face_area(face)) - seg_area) <= FACE_AREA_SLACK * seg_area:
+    area = face_area(face)
+    if not abs(area - seg_area) <= FACE_AREA_SLACK * seg_area:
         return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
     return face, None
 

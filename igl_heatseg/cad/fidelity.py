@@ -45,8 +45,8 @@ from OCP.TopoDS import TopoDS  # noqa: E402
 logger = logging.getLogger(__name__)
 
 __all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
-           "wraps_round", "tessellate", "tessellate_by_type", "face_type", "mesh_volume",
-           "shape_analysis", "shape_valid"]
+           "tessellate", "tessellate_by_type", "face_type", "mesh_volume", "shape_analysis",
+           "shape_valid"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -85,24 +85,6 @@ _TYPE_NAMES = {
     GeomAbs_SurfaceType.GeomAbs_BSplineSurface: "bspline",
     GeomAbs_SurfaceType.GeomAbs_BezierSurface: "bezier",
 }
-
-
-def wraps_round(face, slack: float = 1e-6) -> bool:
-    """True when a face's (u, v) domain spans more than one period of its periodic surface:
-    its trim goes round more than once. OCC's mesher then leaves it untessellated and its
-    volume integral is wrong, though BRepCheck passes (seen on a generated pipe elbow's torus:
-    v from -1.07 to 6.36, a volume 14 % short).
-
-    Examples
-    --------
-    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
-    >>> [wraps_round(f) for f in faces_of(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape())]
-    [False, False, False]
-    """
-    s = BRepAdaptor_Surface(face)
-    u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
-    return bool((s.IsUPeriodic() and u1 - u0 > s.UPeriod() * (1 + slack))
-                or (s.IsVPeriodic() and v1 - v0 > s.VPeriod() * (1 + slack)))
 
 
 def face_area(face) -> float:

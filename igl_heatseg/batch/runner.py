@@ -318,8 +318,8 @@ def run_batch(
     if not meshes:
         raise ValueError("no mesh found in the inputs (" + ", ".join(map(str, inputs)) + ")")
     if mode is None:  # the single-mesh command's own default
-        mode = inspect.signature(kind.run).parameters["mode"].default
-    opts = {"mode": mode, "pictures": pictures}
+        mode = getattr(inspect.signature(kind.run).parameters.get("mode"), "default", None)
+    opts = {"pictures": pictures} if mode is None else {"mode": mode, "pictures": pictures}
     opts.update(options or {})
     t0 = time.perf_counter()
     started = datetime.now(timezone.utc).isoformat(timespec="seconds")

@@ -318,7 +318,8 @@ def run_batch(
     if not meshes:
         raise ValueError("no mesh found in the inputs (" + ", ".join(map(str, inputs)) + ")")
     if mode is None:  # the single-mesh command's own default
-        mode = getattr(inspect.signature(kind.run).parameters.get("mode"), "default", None)
+        param = inspect.signature(kind.run).parameters.get("mode")
+        mode = None if param is None or param.default is param.empty else param.default
     opts = {"pictures": pictures} if mode is None else {"mode": mode, "pictures": pictures}
     opts.update(options or {})
     t0 = time.perf_counter()

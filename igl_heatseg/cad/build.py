@@ -273,13 +273,13 @@ def _seam_polyline(chain, V, projs, ctx):
 
 def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
     """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam).
-    Kept in ``ctx["point_cache"]`` by the chain, its ends' positions and its sides' surfaces:
-    a rebuild moves again only the chains along the segments it faceted."""
+    Kept in ``ctx["point_cache"]`` by the chain, its ends' positions, its sides' surfaces and
+    how far it may move: a rebuild moves again only the chains where one of them changed."""
     sides = (chain.left, chain.right)
     ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
     a, b = int(chain.verts[0]), int(chain.verts[-1])
     key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(),
-           *(id(projs[s]) if s >= 0 and projs[s] is not None else None for s in sides))
+           _move_limit(ctx, sides), *(projs[s] if s >= 0 else None for s in sides))
     cache = ctx.setdefault("point_cache", {})
     if key not in cache:
         R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None

@@ -277,9 +277,9 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
     how far it may move: a rebuild moves again only the chains where one of them changed."""
     sides = (chain.left, chain.right)
     ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
-    a, b = int(chain.verts[0]), int(chain.verts[-1])
-    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(),
-           _move_limit(ctx, sides), *(projs[s] if s >= 0 else None for s in sides))
+    a, b, limit = int(chain.verts[0]), int(chain.verts[-1]), _move_limit(ctx, sides)
+    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(), limit,
+           *(projs[s] if s >= 0 else None for s in sides))
     cache = ctx.setdefault("point_cache", {})
     if key not in cache:
         R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
@@ -290,7 +290,7 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
         if ps and len(P) > 2:
             X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
             ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
-                                              <= _move_limit(ctx, sides))
+                                              <= limit)
             P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
         cache[key] = P, orig, R is not None
     P, orig, restarted = cache[key]

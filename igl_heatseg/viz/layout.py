@@ -85,16 +85,16 @@ def _uv(c: Chart) -> np.ndarray:
 def _normalised_group(V: np.ndarray, cs: list) -> list[np.ndarray]:
     """The UVs of pieces of one map, centred and scaled together to their 3D area."""
     a3 = a2 = 0.0
-    cents = []
-    for c in cs:
-        F, UV = np.asarray(c.cut.F, dtype=np.int64), _uv(c)
+    uvs, cents = [_uv(c) for c in cs], []
+    for c, UV in zip(cs, uvs, strict=True):
+        F = np.asarray(c.cut.F, dtype=np.int64)
         a3 += float(face_areas(V[c.cut.vertex_map], F).sum())
         a2 += float(np.abs(uv_areas(UV, F)).sum())
         cents.append(UV[np.unique(F)])
     s = math.sqrt(a3 / a2) if a2 > 0 and a3 > 0 else 1.0
     centre = np.concatenate(cents).mean(axis=0)
     # rows of vertices F does not use are NaN: zeros
-    return [np.nan_to_num((_uv(c) - centre) * s, nan=0.0) for c in cs]
+    return [np.nan_to_num((UV - centre) * s, nan=0.0) for UV in uvs]
 
 
 def _group_uvs(V: np.ndarray, charts: list, groups: list) -> list[np.ndarray]:

@@ -19,6 +19,7 @@ from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
 
 from .fidelity import count_free_edges, faces_of, shape_valid  # noqa: E402
+from .pcurves import mend_pcurves  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
@@ -104,6 +105,10 @@ def _sew(faces, tol: float, unify: bool):
     fix.SetPrecision(tol * 1e-2)
     fix.SetMaxTolerance(tol)
     fix.Perform()
+    mended, left = mend_pcurves(fix.Shape(), tol)  # sewing's pcurves can stray (pcurves.py)
+    if mended or left:
+        logger.info("sewing left %d pcurve(s) off their edges: %d projected again",
+                    mended + left, mended)
     return _unify(fix.Shape()) if unify else (fix.Shape(), None)
 
 

@@ -129,7 +129,7 @@ def dome_on_cylinder(n=64, r=10.0, h=4.0, noise=0.1, seed=0):
 
 
 def test_noisy_dome_stays_apart_from_its_tangent_cylinder(monkeypatch):
-    import igl_heatseg.surfaces.refine as rf
+    import igl_heatseg.surfaces.merge as merge
 
     V, F, labels = dome_on_cylinder()
     r = refine_segmentation(V, F, labels)
@@ -138,7 +138,7 @@ def test_noisy_dome_stays_apart_from_its_tangent_cylinder(monkeypatch):
     assert np.isclose(sphere.params["radius"], 10.0, rtol=1e-2)
     # the sphere explains the short cylinder within tolerance, clearly worse than its own fit:
     # without the noise-level test of merges the two are one "sphere"
-    monkeypatch.setattr(rf, "MERGE_NOISE_RATIO", np.inf)
+    monkeypatch.setattr(merge, "MERGE_NOISE_RATIO", np.inf)
     r = refine_segmentation(V, F, labels)
     assert [s.kind for s in r.surfaces] == ["sphere"]
 
@@ -222,6 +222,7 @@ def test_a_refused_union_is_not_fitted_again_while_its_parts_keep_their_surfaces
     the plane's surface (the rows lie on it), and the union of the growing plane with the
     cylinder, refused once, is not fitted again after each merge (rounded_box_s1000: 4,992
     union fits, 27 of 29 s). The rows still become one plane and the cylinder stays apart."""
+    import igl_heatseg.surfaces.merge as M
     import igl_heatseg.surfaces.refine as R
 
     s, y = np.linspace(-2.0, np.pi / 2, 41), np.linspace(0.0, 2.0, 21)
@@ -235,8 +236,8 @@ def test_a_refused_union_is_not_fitted_again_while_its_parts_keep_their_surfaces
     flat = C[:, 2] < 1e-9
     labels = np.where(flat, np.minimum((C[:, 1] / 0.2).astype(np.int64), 9), 10)  # 10 rows
     cyl = set(np.flatnonzero(~flat).tolist())
-    unions, fit = [], R.fit_faces
-    monkeypatch.setattr(R, "fit_faces", lambda V, F, faces, *a, **k: unions.append(
+    unions, fit = [], M.fit_faces
+    monkeypatch.setattr(M, "fit_faces", lambda V, F, faces, *a, **k: unions.append(
         cyl <= set(faces.tolist()) and len(faces) > len(cyl)) or fit(V, F, faces, *a, **k))
     r = R.refine_segmentation(V, F, labels, 1e-3, split=False)
     assert len(r.surfaces) == 2

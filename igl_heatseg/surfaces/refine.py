@@ -12,7 +12,8 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    gathered and grown again (:func:`_regrow_strays`): a chamfer one triangle wide, which the
    heat fields deal out between its two neighbours, becomes one cone.
 3. **Merge** adjacent segments that one surface explains within tolerance, cheapest union first
-   (Attene et al. 2006): strips of a coarse cylinder, a plane split by noise.
+   (Attene et al. 2006): strips of a coarse cylinder, a plane split by noise
+   (:mod:`~igl_heatseg.surfaces.merge`).
 4. **Move boundary faces** to the neighbouring surface they lie on, refitting between passes (a
    Lloyd loop as in variational shape approximation, Cohen-Steiner et al. 2004), so boundaries
    follow the crease instead of zig-zagging along triangle edges.
@@ -29,7 +30,6 @@ true surface, its face centroids do not (they sit a chord's sagitta inside a cur
 from __future__ import annotations
 
 import hashlib
-import heapq
 import logging
 import math
 import time
@@ -42,6 +42,7 @@ from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
+from .merge import UPGRADE_ANGLE, merge_segments
 from .samples import segment_adjacency, vertex_samples
 from .segment_fit import (
     GROW_ANGLE,
@@ -52,7 +53,6 @@ from .segment_fit import (
     fit_faces,
     normal_angle,
     normals_agree,
-    rms_to,
 )
 from .split import (
     SPLIT_GOOD_SHARE,
@@ -66,7 +66,7 @@ from .split import (
     real_split,
 )
 from .strays import shed_strays
-from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
+from .tolerance import exact_tessellation, vertex_tolerance
 
 __all__ = [
     "SurfaceSegmentation",
@@ -98,20 +98,6 @@ STALL_TOL = 6.0
 #: Rings of neighbours around a seed face in its first fit.
 SEED_RINGS = 2
 
-#: Two unexplained segments of at most this many faces each are tried in a union.
-MERGE_SMALL_FACES = 64
-
-#: A union is fitted only if one part's surface is within PRECHECK_TOL x tol (RMS) of the
-#: other part's vertices (:func:`~igl_heatseg.surfaces.segment_fit.rms_to`). A part's surface
-#: that misses its neighbour by more cannot become the union's surface, and a more general
-#: kind fitting both would have fitted each part with the same kind.
-PRECHECK_TOL = 10.0
-
-#: ... or when the face normals turn across their shared boundary by less than this on
-#: average (radians): the facets of a coarse curved surface (a 9-facet circle turns 40 degrees
-#: per facet) may join into one surface of a more general kind (strips -> cylinder).
-UPGRADE_ANGLE = math.radians(40.0)
-
 #: Rings of boundary faces left out of a segment's core fit, and the least share of the
 #: segment the core must keep.
 CORE_RINGS = 2
@@ -123,14 +109,6 @@ CORE_EXPLAINS = 0.85
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
-
-#: A merge on a noisy mesh: the worse part's RMS to the union's surface is at most this times the
-#: noise level plus MERGE_NOISE_SLACK x tol. The noise level is the better of the parts' own fit
-#: RMS (a part mixing two surfaces fits worse than the noise), floored at tol / K_NOISE (a few
-#: faces fit better than the noise). As ``segmentation.primitive_merge``'s MERGE_RATIO and
-#: MERGE_SLACK.
-MERGE_NOISE_RATIO = 1.3
-MERGE_NOISE_SLACK = 0.1
 
 
 @dataclass
@@ -312,144 +290,6 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
     if len(rest):  # what no surface explains: its connected pieces
         out[rest] = r + face_pieces(F, TT, rest)
     return out[faces]
-
-
-def _merge(V, F, labels, tol, fits: dict, rejected: set | None = None, W=None, FN=None,
-           noisy: bool = False) -> int:
-    """Greedy merging of adjacent segments whose union one surface explains; cheapest first.
-
-    ``rejected`` caches the unions found unexplained (keyed by both parts' faces), so a later
-    round does not refit a pair that has not changed.
-    """
-    rejected = set() if rejected is None else rejected
-    dirty: set = set()
-    parent = {k: k for k in fits}
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    faces_of = {k: np.flatnonzero(labels == k) for k in fits}
-    fa, fb = segment_adjacency(F, labels)
-    la, lb = np.minimum(labels[fa], labels[fb]), np.maximum(labels[fa], labels[fb])
-    FNs = face_normals(V if W is None else W, F) if FN is None else FN
-    turn = np.arccos(np.clip(np.einsum("ij,ij->i", FNs[fa], FNs[fb]), -1.0, 1.0))
-    bend: dict = {}  # mean turn of the face normals across each pair's shared edges
-    for a, b, x in zip(la.tolist(), lb.tolist(), turn.tolist(), strict=True):
-        sx, n = bend.get((a, b), (0.0, 0))
-        bend[(a, b)] = (sx + x, n + 1)
-    bend = {k: sx / n for k, (sx, n) in bend.items()}
-    pairs = set(bend)
-    nbrs: dict[int, set] = {k: set() for k in fits}
-    for a, b in pairs:
-        nbrs[a].add(b)
-        nbrs[b].add(a)
-    heap = []
-    # the pairs refused in this round, with the surface of one side and the faces of the other
-    # then: a side that has since grown only by segments its own surface explained (its
-    # surface is the same object: merges that keep a part's fit do not refit it) is still
-    # refused next to an unchanged neighbour. A plane absorbing a hundred shards re-pushed
-    # every fillet piece beside it after every merge (rounded_box_s1000: 610 segments, 4,992
-    # union fits, 27 s in this function)
-    refused: dict = {}
-
-    def _still_rejected(a, c) -> bool:
-        was = refused.get((a, c))
-        return was is not None and was[0] is fits[a] and was[1] is faces_of[c]
-
-    def agree(faces, s) -> bool:
-        return normals_agree(V, F, FNs, faces, s)
-
-    def smooth(a, b) -> bool:
-        """The boundary bends less than a crease: facets of one curved surface, maybe."""
-        return bend.get((min(a, b), max(a, b)), math.pi) <= UPGRADE_ANGLE
-
-    def push(a, b):
-        # a union is fitted only when one part's surface already comes near the other part
-        # (the union of two planes at an angle, or of a plane and a fillet, is never tried);
-        # an unexplained piece (a shard of a thin band, a leftover of region growing) may join
-        # a neighbour this way too. When one part's surface already explains the other part,
-        # only its kind is refitted (one fit instead of the search over kinds).
-        key = (len(faces_of[a]), int(faces_of[a].sum()), len(faces_of[b]), int(faces_of[b].sum()))
-        if key in rejected or _still_rejected(a, b) or _still_rejected(b, a):
-            return
-        da, db = rms_to(V, F, faces_of[b], fits[a]), rms_to(V, F, faces_of[a], fits[b])
-        # normals too: a fan cap's vertices all lie on its cylinder's rim
-        if da <= tol and explains(fits[a], tol) and agree(faces_of[b], fits[a]):
-            u = fits[a]  # a's surface explains b: no refit now (refitted once after the round)
-        elif db <= tol and explains(fits[b], tol) and agree(faces_of[a], fits[b]):
-            u = fits[b]
-        elif min(da, db) <= PRECHECK_TOL * tol or smooth(a, b) or (
-            max(len(faces_of[a]), len(faces_of[b])) <= MERGE_SMALL_FACES
-            and not explains(fits[a], tol)
-            and not explains(fits[b], tol)
-        ):
-            # untrimmed (a union that needs faces cut off is not one surface), and the normals
-            # of each part on its own (a small cap on a big cylinder's rim passes the union's)
-            u = fit_faces(V, F, np.r_[faces_of[a], faces_of[b]], tol, W=W, FN=FN, trim=False)
-            if u.is_analytic and not (agree(faces_of[a], u) and agree(faces_of[b], u)):
-                u = None
-        else:
-            u = None
-        if u is not None and noisy and explains(u, tol):
-            # on noise, each part's own fit gives its noise level: the union's surface must
-            # fit both parts about as well (a dome's sphere explains the short cylinder below
-            # it within tolerance, but clearly worse than the cylinder's own fit)
-            worse = max(da if u is fits[a] else rms_to(V, F, faces_of[b], u),
-                        db if u is fits[b] else rms_to(V, F, faces_of[a], u))
-            noise = max(min(fits[a].rms, fits[b].rms), tol / K_NOISE)  # the better fit's
-            if worse > MERGE_NOISE_RATIO * noise + MERGE_NOISE_SLACK * tol:
-                u = None
-        if u is None or not explains(u, tol):
-            rejected.add(key)
-            refused[(a, b)] = (fits[a], faces_of[b])
-            refused[(b, a)] = (fits[b], faces_of[a])
-        else:
-            cost = min(da, db) if u is fits[a] or u is fits[b] else u.rms
-            heapq.heappush(heap, (cost, a, b, id(u), u, key))
-
-    for a, b in sorted(pairs):
-        push(a, b)
-    merged = 0
-    start = {k: (faces_of[k], fits[k]) for k in fits}
-    group = {k: ([k], []) for k in fits}  # the segments merged into k, and the pairs' keys
-    while heap:
-        _, a, b, _, u, key = heapq.heappop(heap)
-        if find(a) != a or find(b) != b:  # stale: one side was merged since
-            continue
-        parent[b] = a
-        gb = group.pop(b)
-        group[a] = (group[a][0] + gb[0], group[a][1] + gb[1] + [key])
-        faces_of[a] = np.concatenate([faces_of[a], faces_of.pop(b)])
-        fits[a] = u
-        dirty.add(a)
-        dirty.discard(b)
-        del fits[b]
-        for c in nbrs[b] - {a}:  # the merged boundary bends as little as its smoothest part
-            key_b, key_a = (min(b, c), max(b, c)), (min(a, c), max(a, c))
-            bend[key_a] = min(bend.get(key_a, math.pi), bend.get(key_b, math.pi))
-        nbrs[a] = (nbrs[a] | nbrs.pop(b)) - {a, b}
-        for c in nbrs[a]:
-            nbrs[c] = (nbrs[c] - {b}) | {a}
-        merged += 1
-        for c in sorted(nbrs[a]):
-            push(a, c)
-    for k, faces in faces_of.items():
-        labels[faces] = k
-    for k in dirty:  # one refit per merged segment, on all its faces
-        fits[k] = fit_faces(V, F, faces_of[k], tol, W=W, FN=FN)
-        members, keys = group[k]
-        if noisy and not explains(fits[k], tol) and any(explains(start[o][1], tol)
-                                                         for o in members):
-            # on noise a chain of merges can drift off every surface: undo it
-            for o in members:
-                labels[start[o][0]] = o
-                fits[o] = start[o][1]
-            rejected.update(keys)
-            merged -= len(members) - 1
-    return merged
 
 
 def _move_boundary_faces(V, F, labels, fits: dict, tol: float, W=None, FN=None, TT=None) -> int:
@@ -765,7 +605,8 @@ def refine_segmentation(
     for _ in range(ROUNDS):  # moves can make segments adjacent that a merge then joins
         t = time.perf_counter()
         progress("merge", 0.0)
-        m_round = _merge(V, F, labels, tol, fits, rejected, W, FN, not exact) if merge else 0
+        m_round = (merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
+                   if merge else 0)
         timings["merge"] += time.perf_counter() - t
         t = time.perf_counter()
         progress("boundaries", 0.0)
@@ -783,13 +624,14 @@ def refine_segmentation(
             fits[k] = fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
         if cut and merge:  # what the cut left of a segment may join a neighbour's surface
-            merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact)
+            merged += merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
     t = time.perf_counter()
     if split and _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
                                     unsplit):
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
-        merged += _merge(V, F, labels, tol, fits, rejected, W, FN, not exact) if merge else 0
+        merged += (merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
+                   if merge else 0)
     timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)

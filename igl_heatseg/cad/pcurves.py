@@ -167,8 +167,9 @@ def mend_pcurves(shape, min_stray: float = 0.0) -> tuple[int, int]:
 
     Every edge of every face that is not a plane (pcurves on planes are exact projections) is
     compared with :func:`pcurve_deviation`; one farther than :data:`STRAY_FACTOR` times its
-    tolerance and than ``min_stray`` gets :func:`_projected`'s pcurve when that one is closer, and its tolerance is
-    raised to what is left. Seam edges (two pcurves on one face) are left alone.
+    tolerance and than ``min_stray`` gets :func:`_projected`'s pcurve when that one is
+    closer, and its tolerance is raised to what is left. Seam edges (two pcurves on one
+    face) are left alone.
 
     Parameters
     ----------

@@ -375,7 +375,8 @@ def write_table(parts: list[dict], work: Path, md: Path, command: str) -> str:
                     c["valid"] += int(bool(r["valid"] and r["solids"] and not r["free_edges"]))
                     c["exact"] += int(r["exact"])
                     c["haus"] += int(r["hausdorff_rel"] <= HAUSDORFF_BAR)
-                    c["part"] += int((r.get("clean_hausdorff_rel") or np.inf) <= HAUSDORFF_BAR)
+                    part = r.get("clean_hausdorff_rel")  # 0.0 (a faceted model) passes
+                    c["part"] += int(part is not None and part <= HAUSDORFF_BAR)
         rows.append(f"| {p['name']} | {p['triangles']} | {p['true_faces']} | "
                     + " | ".join(_cell(res["ours"], True)) + " | "
                     + " | ".join(_cell(res["mesh2cad"], False)) + " |")

@@ -92,3 +92,38 @@ def test_a_freeform_ring_is_built_as_two_bspline_faces():
     assert fid["valid"] and fid["faces"] == 2
     assert fid["free_edges"] == 4  # the two rims, an arc of each on each piece
     assert fid["hausdorff_rel"] < 0.01
+
+
+class _Result:
+    def __init__(self, k, faceted_model, solids):
+        self.faces = [dict(index=i, kind="freeform", status="faceted" if faceted_model else
+                           "built", reason="x" if faceted_model else None, max_dev=0.0,
+                           built_as=None if faceted_model else "bspline") for i in range(k)]
+        self.faceted_model, self.fidelity = faceted_model, {"solids": solids}
+
+    @property
+    def not_built(self):
+        return [f for f in self.faces if f["status"] != "built"]
+
+
+@pytest.mark.parametrize("pieces_ok", [True, False])
+def test_a_model_in_pieces_that_fails_is_built_again_whole(pieces_ok):
+    """Pieces that leave the whole model faceted (a coarse bolt thread did) fall back to the
+    segment whole; pieces that work are kept after one build."""
+    V, F = wavy_ring()
+    calls = []
+
+    def build(V, F, labels, surfaces, uv, tol, progress):
+        calls.append(len(surfaces))
+        split = len(surfaces) > 1
+        return _Result(len(surfaces), faceted_model=split and not pieces_ok, solids=0)
+
+    from igl_heatseg.cad.pieces import build_in_pieces
+
+    res = build_in_pieces(build, V, F, np.zeros(len(F), np.int64),
+                          [Surface("freeform", {"centroid": np.zeros(3)})], None, None, None)
+    assert len(res.faces) == 1 and res.faces[0]["status"] == "built"
+    if pieces_ok:  # an open ring makes no solid: not a failure
+        assert calls == [2] and res.faces[0]["pieces"] == 2
+    else:
+        assert calls == [2, 1] and "pieces" not in res.faces[0]

@@ -44,7 +44,7 @@ from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
-from .pieces import collapse_status, split_nondisk_freeform  # noqa: E402
+from .pieces import build_in_pieces  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
@@ -573,10 +573,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     (True, 1, 1.0)
     """
     V, F, labels = check_inputs(V, F, labels, surfaces, uv)
-    labels, surfaces, uv, origin = split_nondisk_freeform(V, F, labels, surfaces, uv)
-    res = _build(V, F, labels, surfaces, uv, tol, progress or (lambda stage, frac: None))
-    res.faces = collapse_status(res.faces, origin)  # one entry per segment, pieces counted
-    return res
+    return build_in_pieces(_build, V, F, labels, surfaces, uv, tol,
+                           progress or (lambda stage, frac: None))
 
 
 def _build(V, F, labels, surfaces, uv, tol, progress) -> CadResult:

@@ -212,7 +212,8 @@ def mend_pcurves(shape, min_stray: float = 0.0) -> tuple[int, int]:
                 continue
             old = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
             builder.UpdateEdge(edge, pcurve, face, tol)
-            now = pcurve_deviation(edge, face, 2 * CHECK_SAMPLES)
+            # between the points it was fitted through too (a spline can ring there)
+            now = pcurve_deviation(edge, face, 2 * PROJECT_SAMPLES - 1)
             if now >= worst:
                 builder.UpdateEdge(edge, old, face, tol)
                 left += 1

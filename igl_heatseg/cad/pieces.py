@@ -10,17 +10,26 @@ yet is split again, up to :data:`MAX_DEPTH` times. The split with the fewest pie
 shortest cut, is kept; a segment no split turns into disks is left whole (faceted, as before).
 
 Each piece is built as a face of its own (a freeform face bounded by the cuts); the report
-keeps one entry per segment and counts its pieces (:func:`collapse_status`).
+keeps one entry per segment and counts its pieces (:func:`collapse_status`). A model with
+pieces that ends up fully faceted, or without the solid, is built again with the segments whole
+(:func:`build_in_pieces`): B-spline pieces of a coarse bolt thread left sewn faces invalid and
+the rebuilds faceted every segment.
 """
 
 from __future__ import annotations
 
+import logging
+
+import igl
 import numpy as np
 
 from igl_heatseg.mesh.topology import face_components
 from igl_heatseg.surfaces.model import Surface
 
-__all__ = ["is_disk", "disk_pieces", "split_nondisk_freeform", "collapse_status", "MAX_DEPTH"]
+__all__ = ["is_disk", "disk_pieces", "split_nondisk_freeform", "collapse_status",
+           "build_in_pieces", "MAX_DEPTH"]
+
+logger = logging.getLogger(__name__)
 
 #: Rounds of splitting (at most 2**MAX_DEPTH pieces per segment).
 MAX_DEPTH = 3
@@ -30,8 +39,8 @@ MIN_PIECE_FACES = 8
 
 
 def is_disk(F: np.ndarray) -> bool:
-    """Whether triangles form a topological disk: edge-manifold, one boundary loop, Euler
-    characteristic 1 (and so connected).
+    """Whether triangles form a topological disk: edge-connected, edge-manifold, one boundary
+    loop, Euler characteristic 1.
 
     Parameters
     ----------
@@ -53,7 +62,7 @@ def is_disk(F: np.ndarray) -> bool:
     False
     """
     F = np.asarray(F, dtype=np.int64)
-    if len(F) == 0:
+    if len(F) == 0 or face_components(F)[0] != 1:
         return False
     E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
     edges, uses = np.unique(E, axis=0, return_counts=True)
@@ -177,7 +186,7 @@ def split_nondisk_freeform(V, F, labels, surfaces, uv=None):
         Segments ``0..k-1``.
     surfaces : list of Surface
         ``k`` fitted surfaces.
-    uv : list or None
+    uv : list, optional
         Per segment, a chart or None (a segment with a chart is left as it is).
 
     Returns
@@ -210,6 +219,9 @@ def split_nondisk_freeform(V, F, labels, surfaces, uv=None):
         pieces = disk_pieces(V, F, faces)
         if pieces is None or len(pieces) == 1:
             continue
+        logger.info("freeform segment %d is not a disk: built as %d pieces (segments %d..%d "
+                    "in the messages below)", a, len(pieces), len(surfaces),
+                    len(surfaces) + len(pieces) - 2)
         for p in pieces[1:]:
             labels[p] = len(surfaces)
             surfaces.append(Surface("freeform", dict(s.params), rms=s.rms, max_dev=s.max_dev,
@@ -255,8 +267,71 @@ def collapse_status(status: list, origin: np.ndarray) -> list:
         out[a]["pieces"] = len(mine)
         devs = [e["max_dev"] for e in mine if e.get("max_dev") is not None]
         out[a]["max_dev"] = max(devs) if devs else None
-        if failed:
-            out[a].update(status="faceted", built_as=None,
-                          reason=f"{len(failed)} of its {len(mine)} disk pieces: "
+        if failed:  # built_as: how the pieces built were made, if any
+            out[a].update(status="faceted",
+                          built_as=next((e.get("built_as") for e in mine
+                                         if e["status"] == "built"), None),
+                          reason=f"{len(failed)} of its {len(mine)} disk pieces faceted: "
                                  f"{failed[0]['reason']}")
     return out
+
+
+def build_in_pieces(build, V, F, labels, surfaces, uv, tol, progress):
+    """Build a B-Rep with the non-disk freeform segments cut into disk pieces, and again with
+    them whole when the pieces' model is worse.
+
+    Parameters
+    ----------
+    build : callable
+        ``build(V, F, labels, surfaces, uv, tol, progress) -> CadResult`` (one report entry
+        per segment it is given).
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+    surfaces : list of Surface
+    uv : list or None
+    tol : float or None
+    progress : callable
+
+    Returns
+    -------
+    CadResult
+        With one :attr:`~CadResult.faces` entry per input segment (:func:`collapse_status`).
+        When a segment was split and that model is fully faceted or (of a closed mesh) no
+        solid, the model with every segment whole is built too and the better kept (not fully
+        faceted, then a solid, then fewer faceted segments; ties keep the pieces).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> calls = []
+    >>> class R:
+    ...     def __init__(self, k):
+    ...         self.faces = [dict(index=i, status="built", max_dev=0.0) for i in range(k)]
+    ...         self.faceted_model, self.fidelity, self.not_built = False, {"solids": 1}, []
+    >>> def build(V, F, labels, surfaces, uv, tol, progress):
+    ...     calls.append(len(surfaces))
+    ...     return R(len(surfaces))
+    >>> F = np.array([[0, 1, 2], [0, 2, 3]])
+    >>> res = build_in_pieces(build, np.eye(4, 3), F, np.zeros(2, np.int64),
+    ...                       [Surface("freeform", {"centroid": np.zeros(3)})], None, None, None)
+    >>> calls, len(res.faces)    # a disk: one build, one entry
+    ([1], 1)
+    """
+    split = split_nondisk_freeform(V, F, labels, surfaces, uv)
+    res, origin = build(V, F, *split[:3], tol, progress), split[3]
+    closed = len(igl.boundary_facets(F)[0]) == 0
+    if len(origin) > len(surfaces) and (
+            res.faceted_model or (closed and not res.fidelity.get("solids"))):
+        logger.warning("the model with %d freeform segment(s) cut into disk pieces is %s; "
+                       "building it with them whole", len(set(origin[len(surfaces):].tolist())),
+                       "fully faceted" if res.faceted_model else "no solid")
+        whole = build(V, F, labels, surfaces, uv, tol, progress)
+
+        def rank(r):
+            return (not r.faceted_model, bool(r.fidelity.get("solids")), -len(r.not_built))
+
+        if rank(whole) > rank(res):
+            res, origin = whole, np.arange(len(surfaces))
+    res.faces = collapse_status(res.faces, origin)
+    return res

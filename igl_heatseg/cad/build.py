@@ -44,7 +44,6 @@ from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
-from .pieces import build_in_pieces  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
@@ -432,12 +431,14 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
     face = None
     if a in ctx["revolved"]:
         face = periodic.revolved_face(geom, ctx["revolved"][a])
-    if face is None and not loops:
+    if face is not None:
+        pass
+    elif not loops:
         mk = BRepBuilderAPI_MakeFace(geom, ctx["vertex_tol"])
         if not mk.IsDone():
             return None, "closed segment on an unbounded surface"
         face = mk.Face()
-    elif face is None:
+    else:
         surf = ctx["surfaces"][a]
         if a in ctx["wraps"]:  # seam through the vertices of its closed edges
             u0 = ctx["wraps"][a]
@@ -507,6 +508,12 @@ def _sew_tolerance(ctx, devs) -> float:
     return float(min(max(4 * ctx["curve_tol"], 2.0 * dev), 0.5 * ctx["mean_edge"]))
 
 
+def _is_closed(F) -> bool:
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    _, counts = np.unique(E, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
 def _faceted_result(V, F, ctx, closed, timings, message):
     t = time.perf_counter()
     faces = faceted.triangle_faces(V, F, ctx["vertex_tol"])
@@ -531,8 +538,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         ``surfaces[a]`` fitted to segment ``a`` (``outward`` as in the fit).
     uv : list of (ids, UV) or None, optional
         Per segment, ``None`` or a bijective chart: vertex ids ``(p,)`` and ``UV (p, 2)``;
-        used for freeform segments (one without is cut into disks, :mod:`.pieces`, each
-        with a harmonic chart: a face per piece).
+        used for freeform segments (a disk segment without one gets a harmonic chart).
     tol : float, optional
         Modelling tolerance (model units): a segment farther than this from its analytic
         surface (or misfit by it: MISFIT_RMS_RATIO) gets a B-spline face over its chart within
@@ -573,15 +579,11 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     (True, 1, 1.0)
     """
     V, F, labels = check_inputs(V, F, labels, surfaces, uv)
-    return build_in_pieces(_build, V, F, labels, surfaces, uv, tol,
-                           progress or (lambda stage, frac: None))
-
-
-def _build(V, F, labels, surfaces, uv, tol, progress) -> CadResult:
+    progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
-    closed = len(igl.boundary_facets(F)[0]) == 0  # (a validated, edge-manifold mesh)
+    closed = _is_closed(F)
     ctx["notes"] = {}
     ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
                             MISFIT_RMS_FLOOR * ctx["tol"])

@@ -88,6 +88,8 @@ def pcurve_deviation(edge, face, samples: int = CHECK_SAMPLES) -> float:
         return float("inf")
     a, b = BRep_Tool.Range_s(edge, face)
     curve = BRep_Tool.Curve_s(edge, 0.0, 0.0)
+    if curve is None:  # pcurves only: nothing to compare with
+        return 0.0
     return float(_sample(pcurve, BRep_Tool.Surface_s(face), curve,
                          np.linspace(a, b, samples)).max())
 

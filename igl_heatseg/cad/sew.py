@@ -1,4 +1,5 @@
-"""Faces to a shell or solid: sewing, shape fixing, same-domain unification, solid making."""
+"""Faces to a shell or solid: sewing, shape fixing, pcurves sewing left off their edges
+projected again (:mod:`.pcurves`), same-domain unification, solid making."""
 
 from __future__ import annotations
 

@@ -146,19 +146,19 @@ def _projected(edge, face):
     T = np.linspace(a, b, PROJECT_SAMPLES)
     analysis = ShapeAnalysis_Surface(surface)
     prec = BRep_Tool.Tolerance_s(edge)
-    prev, UV = old.Value(a), np.empty((len(T), 2))
+    start, end = old.Value(a), old.Value(b)
+    prev, UV = start, np.empty((len(T), 2))
     for i, t in enumerate(T):
         uv = analysis.NextValueOfUV(prev, curve.Value(float(t)), prec, -1.0)
         UV[i] = uv.X(), uv.Y()
         prev = uv
-    start, end = old.Value(a), old.Value(b)
-    for k, (periodic, period) in enumerate(
-            ((surface.IsUPeriodic(), surface.IsUPeriodic() and surface.UPeriod()),
-             (surface.IsVPeriodic(), surface.IsVPeriodic() and surface.VPeriod()))):
-        if periodic:
-            UV[1:, k] -= period * np.cumsum(np.round(np.diff(UV[:, k]) / period))
-            UV[:, k] += period * np.round(((start.X(), start.Y())[k] - UV[0, k]) / period)
     ends = np.array([[start.X(), start.Y()], [end.X(), end.Y()]])
+    periods = (surface.UPeriod() if surface.IsUPeriodic() else 0.0,
+               surface.VPeriod() if surface.IsVPeriodic() else 0.0)
+    for k, period in enumerate(periods):
+        if period:  # one sheet along the curve, the old pcurve's start's
+            UV[:, k] = np.unwrap(UV[:, k], period=period)
+            UV[:, k] += period * np.round((ends[0, k] - UV[0, k]) / period)
     if np.abs(UV[[0, -1]] - ends).max() > 1e-3 * (float(np.ptp(UV, axis=0).max()) or 1.0):
         return None
     return pcurve_through(UV, T)

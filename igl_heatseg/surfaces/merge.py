@@ -127,7 +127,7 @@ def merge_segments(V, F, labels, tol, fits: dict, rejected: set | None = None, W
     # union fits, 27 s in this function)
     refused: dict = {}
 
-    def _still_rejected(a, c) -> bool:
+    def still_refused(a, c) -> bool:
         was = refused.get((a, c))
         return was is not None and was[0] is fits[a] and was[1] is faces_of[c]
 
@@ -145,7 +145,7 @@ def merge_segments(V, F, labels, tol, fits: dict, rejected: set | None = None, W
         # a neighbour this way too. When one part's surface already explains the other part,
         # only its kind is refitted (one fit instead of the search over kinds).
         key = (len(faces_of[a]), int(faces_of[a].sum()), len(faces_of[b]), int(faces_of[b].sum()))
-        if key in rejected or _still_rejected(a, b) or _still_rejected(b, a):
+        if key in rejected or still_refused(a, b) or still_refused(b, a):
             return
         da, db = rms_to(V, F, faces_of[b], fits[a]), rms_to(V, F, faces_of[a], fits[b])
         # normals too: a fan cap's vertices all lie on its cylinder's rim

@@ -468,16 +468,16 @@ def test_connected_triangles_of_a_closed_mesh_make_a_solid_without_sewing(monkey
 
 
 def test_one_segment_failing_to_fit_facets_only_that_segment(monkeypatch):
-    import igl_heatseg.cad.build as build_mod
+    import igl_heatseg.cad.surface_choice as choice_mod
 
-    real = build_mod._surface_for
+    real = choice_mod.surface_for
 
     def fail_on_two(a, *args, **kwargs):
         if a == 2:
             raise RuntimeError("igl::lscm failed")
         return real(a, *args, **kwargs)
 
-    monkeypatch.setattr(build_mod, "_surface_for", fail_on_two)
+    monkeypatch.setattr(choice_mod, "surface_for", fail_on_two)
     V, F, labels = box_mesh(2)
     res = build_brep(V, F, labels, box_planes())
     assert not res.faceted_model
@@ -951,8 +951,10 @@ def test_model_broken_by_a_bspline_stand_in_is_built_again_without_it(monkeypatc
         return real(shape, *args, **kwargs)
 
     monkeypatch.setattr(build_mod, "_invalid_segments", bspline_breaks_it)
-    fitted, surface_for = [], build_mod._surface_for
-    monkeypatch.setattr(build_mod, "_surface_for", lambda a, *r, **k: fitted.append(a) or
+    import igl_heatseg.cad.surface_choice as choice_mod
+
+    fitted, surface_for = [], choice_mod.surface_for
+    monkeypatch.setattr(choice_mod, "surface_for", lambda a, *r, **k: fitted.append(a) or
                         surface_for(a, *r, **k))
     V, F, labels, surfs = _wrong_side_plane()
     res = build_brep(V, F, labels, surfs)

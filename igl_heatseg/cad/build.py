@@ -38,7 +38,7 @@ from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
 from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
-from . import faceted, freeform, geometry, periodic  # noqa: E402
+from . import faceted, geometry, periodic, surface_choice  # noqa: E402
 from .blame import blame as _blame  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
@@ -156,63 +156,6 @@ class CadResult:
             "faceted_model": bool(self.faceted_model),
             "message": self.message,
         }
-
-
-def _segment(V, F, faces):
-    verts, Fl = np.unique(F[faces], return_inverse=True)
-    return verts, Fl.reshape(-1, 3)
-
-
-def _surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes=None):
-    """(OCC surface, projector, max deviation, reason) for segment a; reason None when usable.
-    An analytic surface farther than ``tol`` from the segment, or whose vertex RMS distance is
-    above ``misfit``, is replaced, when ``bspline``, by a B-spline fitted over the segment's
-    chart (:func:`freeform.segment_chart`); in the second case only when the B-spline is the
-    closer of the two. ``notes[a]`` then says why (for the report)."""
-    verts, Fl = _segment(V, F, faces)
-    if s.is_analytic:
-        d = np.abs(s.distance(V[verts]))
-        dev, rms = float(d.max()), float(np.sqrt(np.mean(d**2)))
-        within = dev <= tol
-        try:
-            UV = freeform.segment_chart(s, V[verts], Fl) if bspline and (
-                not within or rms > misfit) else None
-            geom, err = (None, math.nan) if UV is None else \
-                freeform.freeform_surface(V[verts], Fl, UV, tol)
-        except Exception:  # noqa: BLE001 (OCC, numpy): within the tolerance, keep the surface
-            if not within:
-                raise
-            UV, geom, err = None, None, math.nan
-        if geom is not None and err <= tol and not (within and err >= dev):
-            if notes is not None:
-                notes[a] = (f"{s.kind} within the tolerance but misfit: vertex RMS {rms:.3g} "
-                            f"above {misfit:.3g}" if within else
-                            f"{s.kind} deviates {dev:.3g} (tol {tol:.3g})") + \
-                    f"; B-spline within {err:.3g}, the {s.kind} within {dev:.3g}"
-            return geom, geometry.Projector(None, geom), err, None
-        if within:  # the analytic surface: no B-spline needed, or none closer
-            geom = geometry.occ_surface(s)
-            return geom, geometry.Projector(s, geom), dev, None
-        why = f"surface deviates {dev:.3g} from its segment (tol {tol:.3g})"
-        return None, None, dev, why if UV is None else f"{why}; B-spline fit error {err:.3g}"
-    UV = None
-    if uv is not None and uv[a] is not None:
-        ids, UVg = (np.asarray(x) for x in uv[a])
-        if not np.array_equal(np.unique(ids), verts):
-            return None, None, math.nan, "given chart does not cover the segment's vertices"
-        UV = np.zeros((len(verts), 2))
-        UV[np.searchsorted(verts, ids)] = np.asarray(UVg, dtype=np.float64)
-        UV = freeform.orient_chart(UV, Fl)  # mirrored if clockwise: normals follow the mesh
-        if UV is None:
-            return None, None, math.nan, "given chart folds (triangles of both orientations)"
-    else:
-        UV = freeform.disk_chart(V[verts], Fl)
-        if UV is None:
-            return None, None, math.nan, "freeform segment is not a disk and has no chart"
-    geom, err = freeform.freeform_surface(V[verts], Fl, UV, tol)
-    if geom is None or err > tol:
-        return None, None, err, f"B-spline fit error {err:.3g} above tol {tol:.3g}"
-    return geom, geometry.Projector(None, geom), err, None
 
 
 def _vertex(builder, X, tol):
@@ -730,7 +673,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             cache[key] = cache[(a, True)]  # built on its analytic surface: no B-spline involved
         if key not in cache:
             try:
-                cache[key] = _surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
+                cache[key] = surface_choice.surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
                                         bspline=ctx.get("bspline", True),
                                         misfit=ctx["misfit_rms"], notes=ctx["notes"])
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors

@@ -1003,3 +1003,24 @@ def test_vertices_on_a_hole_of_a_face_tessellation_get_projected():
     assert fidelity._projected_distances(centre[None], d, face_of, meshed, coarse, 1e-3)[0] > 0.9
     out = fidelity._projected_distances(centre[None], d, face_of, meshed, coarse, 1e-3, short)
     assert out[0] < 1e-9
+
+
+def test_area_slack_grows_for_narrow_segments():
+    from types import SimpleNamespace
+
+    import igl_heatseg.cad.build as build_mod
+
+    def slack(w, h, edge=1.0):  # a w x h rectangle, its outline one chain
+        V = np.array([[0.0, 0, 0], [w, 0, 0], [w, h, 0], [0, h, 0]])
+        ctx = {"mesh": (V, None), "mean_edge": edge,
+               "chains": [SimpleNamespace(verts=np.array([0, 1, 2, 3, 0]))]}
+        return build_mod._area_slack([[(0, True)]], ctx, w * h)
+
+    # wide: the boundary's half edge is 0.5 * 40 / 100 = 0.2 of the area, the plain slack
+    assert slack(10, 10) == pytest.approx(build_mod.FACE_AREA_SLACK)
+    assert slack(10, 4) == pytest.approx(0.5 * 28 / 40)  # narrower: more
+    assert slack(10, 1) == pytest.approx(build_mod.FACE_AREA_SLACK_MAX)  # capped
+    assert slack(100, 100) == pytest.approx(build_mod.FACE_AREA_SLACK)  # never below it
+    # a closed face without loops keeps the plain slack
+    assert build_mod._area_slack([], {"mesh": (np.zeros((1, 3)), None), "mean_edge": 1.0,
+                                      "chains": []}, 5.0) == build_mod.FACE_AREA_SLACK

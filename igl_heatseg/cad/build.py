@@ -77,6 +77,12 @@ MIN_EDGE_SAMPLES = 24
 #: was trimmed wrongly (complement chosen, loop lost) and is faceted instead.
 FACE_AREA_SLACK = 0.2
 
+#: A segment's boundary runs along mesh edges, the face's along the intersection of the
+#: surfaces: up to about half a mesh edge apart on every side. A narrow segment (a chamfer two
+#: triangles wide) may therefore differ from its face by more than FACE_AREA_SLACK: its slack
+#: is BOUNDARY_SHIFT mean edges times its loops' length over its area, up to FACE_AREA_SLACK_MAX.
+BOUNDARY_SHIFT, FACE_AREA_SLACK_MAX = 0.5, 0.5
+
 #: A trimmed B-spline face reaching farther than this many tolerances from the mesh is not
 #: built: within the tolerance of its segment and of the surfaces of its neighbours, it runs
 #: on past its chart only through a wrong trim (seen: 5 units out of a coarse block's side).
@@ -423,9 +429,19 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         if off > FREEFORM_OFF_MESH * ctx["tol"]:
             return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
     area = face_area(face)
-    if not abs(area - seg_area) <= FACE_AREA_SLACK * seg_area:
+    if not abs(area - seg_area) <= _area_slack(loops, ctx, seg_area) * seg_area:
         return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
     return face, None
+
+
+def _area_slack(loops, ctx, seg_area) -> float:
+    """Relative area difference allowed between a trimmed face and its segment (see
+    BOUNDARY_SHIFT): FACE_AREA_SLACK, more for a narrow segment, at most FACE_AREA_SLACK_MAX."""
+    V = ctx["mesh"][0]
+    length = sum(float(np.linalg.norm(np.diff(V[ctx["chains"][c].verts], axis=0), axis=1).sum())
+                 for loop in loops for c, _ in loop)
+    shift = BOUNDARY_SHIFT * ctx["mean_edge"] * length / max(seg_area, 1e-300)
+    return min(FACE_AREA_SLACK_MAX, max(FACE_AREA_SLACK, shift))
 
 
 def _tolerances(V, F, surfaces, tol):

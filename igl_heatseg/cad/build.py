@@ -429,8 +429,12 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         if off > FREEFORM_OFF_MESH * ctx["tol"]:
             return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
     area = face_area(face)
-    if not abs(area - seg_area) <= _area_slack(loops, ctx, seg_area) * seg_area:
+    off = abs(area - seg_area)
+    if not off <= (_area_slack(loops, ctx, seg_area) if ctx["wide_area"] else
+                   FACE_AREA_SLACK) * seg_area:
         return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
+    if not off <= FACE_AREA_SLACK * seg_area:
+        ctx["widened"].add(a)  # built on the narrow segment's slack only
     return face, None
 
 
@@ -516,6 +520,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         returns the fully faceted model (``faceted_model=True``), unless the mesh has several
         edge-connected parts: they are then built one by one
         (:func:`~igl_heatseg.cad.components.build_by_component`; a compound).
+        Before that, a model that came out fully faceted, or not a solid from a closed mesh,
+        is built again without its B-spline stand-ins for analytic segments, then without
+        the narrow faces that only BOUNDARY_SHIFT's area slack admitted, each kept when better.
 
     Raises
     ------
@@ -548,17 +555,21 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
                             MISFIT_RMS_FLOOR * ctx["tol"])
     timings: dict = {}
     ctx["bspline"], ctx["fallbacks"] = True, set()
+    ctx["wide_area"], ctx["widened"] = True, set()
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, labels, surfaces, uv, ctx, closed, timings, progress)
-    if ctx["fallbacks"] and (faceted_model or (closed and not solid)):
-        # the B-spline stand-ins may be what broke it: the model without them, if better
-        logger.warning("the model with B-spline stand-ins for segments %s is %s; building "
-                       "it without them", sorted(ctx["fallbacks"]),
-                       "faceted" if faceted_model else "not a solid")
-        ctx["bspline"] = False
-        again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
-        if (not again[3], again[5]) > (not faceted_model, solid):
-            shape, status, sew_tol, faceted_model, message, solid = again
+    for key, what in (("fallbacks", "B-spline stand-ins"),
+                      ("widened", "narrow faces that only BOUNDARY_SHIFT's slack admitted")):
+        if ctx[key] and (faceted_model or (closed and not solid)):
+            # they may be what broke it: the model without them, if better (the second
+            # rebuild keeps the first one's choice of no B-splines)
+            logger.warning("the model with %s for segments %s is %s; building it without "
+                           "them", what, sorted(ctx[key]),
+                           "faceted" if faceted_model else "not a solid")
+            ctx["bspline" if key == "fallbacks" else "wide_area"] = False
+            again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
+            if (not again[3], again[5]) > (not faceted_model, solid):
+                shape, status, sew_tol, faceted_model, message, solid = again
     tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
     if faceted_model:  # a part of the mesh that no rebuild mends need not facet the others
         t = time.perf_counter()

@@ -1039,14 +1039,16 @@ def test_model_broken_by_a_narrow_face_is_built_again_without_it(monkeypatch):
         else 1.0))
     monkeypatch.setattr(build_mod, "_area_slack", lambda loops, ctx, seg_area: 0.5)
     calls = []
-    real = build_mod._invalid_segments
+    real = build_mod.assemble
 
-    def first_model_broken(shape, *args, **kwargs):  # the model with the narrow face breaks
+    def first_not_a_solid(*args, **kwargs):  # the model with the narrow face makes no solid
+        shape, info = real(*args, **kwargs)
         calls.append(1)
-        return None if len(calls) == 1 else real(shape, *args, **kwargs)
+        return shape, dict(info, solid=False) if len(calls) == 1 else info
 
-    monkeypatch.setattr(build_mod, "_invalid_segments", first_model_broken)
+    monkeypatch.setattr(build_mod, "assemble", first_not_a_solid)
     res = build_brep(V, F, labels, surfs)
+    assert len(calls) == 2 and res.message == ""
     assert not res.faceted_model and res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert [f["index"] for f in res.not_built] == [2]
     assert res.faces[2]["reason"].startswith("trimmed face area")

@@ -521,8 +521,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         edge-connected parts: they are then built one by one
         (:func:`~igl_heatseg.cad.components.build_by_component`; a compound).
         Before that, a model that came out fully faceted, or not a solid from a closed mesh,
-        is built again without its B-spline stand-ins for analytic segments, then without
-        the narrow faces that only BOUNDARY_SHIFT's area slack admitted, each kept when better.
+        is built again without its B-spline stand-ins for analytic segments; one not a solid
+        from a closed mesh also without the narrow faces that only BOUNDARY_SHIFT's area slack
+        admitted; each kept when better.
 
     Raises
     ------
@@ -560,7 +561,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         V, F, labels, surfaces, uv, ctx, closed, timings, progress)
     for key, what in (("fallbacks", "B-spline stand-ins"),
                       ("widened", "narrow faces that only BOUNDARY_SHIFT's slack admitted")):
-        if ctx[key] and (faceted_model or (closed and not solid)):
+        # (a fully faceted model is not built again for the narrow faces: on the 4 seen, the
+        # rebuild failed the same way and cost half the time again)
+        if ctx[key] and ((faceted_model and key == "fallbacks") or (closed and not solid)):
             # they may be what broke it: the model without them, if better (the second
             # rebuild keeps the first one's choice of no B-splines)
             logger.warning("the model with %s for segments %s is %s; building it without "

@@ -429,11 +429,11 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         if off > FREEFORM_OFF_MESH * ctx["tol"]:
             return None, f"trimmed B-spline face lies {off:.3g} from the mesh"
     area = face_area(face)
-    off = abs(area - seg_area)
-    if not off <= (_area_slack(loops, ctx, seg_area) if ctx["wide_area"] else
-                   FACE_AREA_SLACK) * seg_area:
+    area_gap = abs(area - seg_area)
+    if not area_gap <= (_area_slack(loops, ctx, seg_area) if ctx["wide_area"] else
+                        FACE_AREA_SLACK) * seg_area:
         return None, f"trimmed face area {area:.4g} differs from the segment's {seg_area:.4g}"
-    if not off <= FACE_AREA_SLACK * seg_area:
+    if not area_gap <= FACE_AREA_SLACK * seg_area:
         ctx["widened"].add(a)  # built on the narrow segment's slack only
     return face, None
 

@@ -559,17 +559,19 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["wide_area"], ctx["widened"] = True, set()
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, labels, surfaces, uv, ctx, closed, timings, progress)
-    for key, what in (("fallbacks", "B-spline stand-ins"),
-                      ("widened", "narrow faces that only BOUNDARY_SHIFT's slack admitted")):
-        # (a fully faceted model is not built again for the narrow faces: on the 4 seen, the
-        # rebuild failed the same way and cost half the time again)
-        if ctx[key] and ((faceted_model and key == "fallbacks") or (closed and not solid)):
-            # they may be what broke it: the model without them, if better (the second
-            # rebuild keeps the first one's choice of no B-splines)
+    # (built, allowed, what, also when fully faceted): the faces that may be what broke the
+    # model; it is built again without them, and kept if better (the second rebuild keeps the
+    # first one's choice). A fully faceted model is not built again for the narrow faces: of
+    # the 4 seen, none came out better, at half the time again.
+    for key, allow, what, if_faceted in (
+            ("fallbacks", "bspline", "B-spline stand-ins", True),
+            ("widened", "wide_area", "narrow faces that only BOUNDARY_SHIFT's slack admitted",
+             False)):
+        if ctx[key] and ((faceted_model and if_faceted) or (closed and not solid)):
             logger.warning("the model with %s for segments %s is %s; building it without "
                            "them", what, sorted(ctx[key]),
                            "faceted" if faceted_model else "not a solid")
-            ctx["bspline" if key == "fallbacks" else "wide_area"] = False
+            ctx[allow] = False
             again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
             if (not again[3], again[5]) > (not faceted_model, solid):
                 shape, status, sew_tol, faceted_model, message, solid = again

@@ -270,10 +270,7 @@ def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=
     """Build the B-Rep of a segmentation, write ``out/model.step`` (AP214, mm) and, with
     ``pictures``, ``out/brep.png``; returns the ``cad`` section of ``report.json``.
 
-    Segments keep their labels (``labels.txt``; a border face lying on a neighbouring
-    segment's surface may be built with that segment's face: ``handed_over`` in the report,
-    :func:`~igl_heatseg.cad.relabel.hand_over_border_faces`): robust mode's fitted surfaces are
-    used as they are; a
+    Segments keep their labels: robust mode's fitted surfaces are used as they are; a
     segmentation without surfaces (paper mode) gets one fitted per segment
     (:func:`~igl_heatseg.cad.fit_segment_surfaces`). With ``charts`` (the pipeline's),
     freeform segments are fitted over their certified chart maps

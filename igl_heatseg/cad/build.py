@@ -44,7 +44,6 @@ from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
-from .relabel import hand_over_border_faces  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
@@ -137,11 +136,6 @@ class CadResult:
     faceted_model : bool
         True when the whole build failed and ``shape`` is the fully faceted mesh (of a mesh of
         several parts: every part faceted).
-    message : str
-        Why the model is fully faceted, or empty.
-    handed_over : list of [face, from, to]
-        Border faces built with a neighbouring segment's face, on whose surface they lie
-        (:func:`~igl_heatseg.cad.relabel.hand_over_border_faces`).
     """
 
     shape: object
@@ -151,7 +145,6 @@ class CadResult:
     tolerances: dict = field(default_factory=dict)
     faceted_model: bool = False
     message: str = ""
-    handed_over: list = field(default_factory=list)
 
     @property
     def not_built(self) -> list:
@@ -168,7 +161,6 @@ class CadResult:
             "tolerances": dict(self.tolerances),
             "faceted_model": bool(self.faceted_model),
             "message": self.message,
-            "handed_over": [list(x) for x in self.handed_over],
         }
 
 
@@ -563,9 +555,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
                             MISFIT_RMS_FLOOR * ctx["tol"])
     timings: dict = {}
-    given = labels
-    labels, _ = hand_over_border_faces(V, F, labels, surfaces, ctx["tol"])
-    handed = [[int(f), int(given[f]), int(labels[f])] for f in np.flatnonzero(labels != given)]
     ctx["bspline"], ctx["fallbacks"] = True, set()
     ctx["wide_area"], ctx["widened"] = True, set()
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
@@ -593,15 +582,14 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         if parts is not None:
             timings["components"] = time.perf_counter() - t
         if parts is not None and not parts[3]:  # (each part was sewn with its own tolerance)
-            return CadResult(*parts[:3], timings, {**tols, "sew_tol": None}, *parts[3:],
-                             handed_over=handed)
+            return CadResult(*parts[:3], timings, {**tols, "sew_tol": None}, *parts[3:])
     t = time.perf_counter()
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)
     timings["fidelity"] = time.perf_counter() - t
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
-    return CadResult(shape, status, fid, timings, tols, faceted_model, message, handed)
+    return CadResult(shape, status, fid, timings, tols, faceted_model, message)
 
 
 def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):

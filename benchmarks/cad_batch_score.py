@@ -1,0 +1,141 @@
+"""Score the CAD outputs of ``igl-heatseg batch SET -o OUT --command cad`` on a generated set,
+and compare two such runs part by part (the tuning set's harness; ``bench_cad.py`` is the
+validation set's, beside mesh2cad).
+
+Per part, from ``OUT/NAME/report.json`` and ``model.step``: segments and faceted segments,
+a valid closed solid (BRepCheck, a solid, no free edge), the two-sided Hausdorff distance to
+the mesh (the report's) and to the part (to the noise-free mesh of a noisy part, rebuilt from
+the set's ``manifest.json`` as ``bench_cad.score`` does), the volume error and the seconds.
+Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
+The scores are cached in ``OUT/cad_score.json``.
+
+Usage::
+
+    igl-heatseg batch /work/parts/tuning -o /tmp/a --command cad --workers 2 --no-pictures
+    python benchmarks/cad_batch_score.py /work/parts/tuning /tmp/a            # one run
+    python benchmarks/cad_batch_score.py /work/parts/tuning /tmp/a /tmp/b     # before, after
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import re
+import sys
+from pathlib import Path
+
+_HERE = Path(__file__).resolve().parent
+sys.path[:0] = [str(_HERE), str(_HERE.parent / "tools")]
+
+BAR = 0.005
+
+
+def _clean_mesh(entry: dict, cache: Path) -> str:
+    """The noise-free tessellation of a generated part, written once under ``cache``."""
+    import igl
+    import make_benchmark_sets as mbs
+    import numpy as np
+
+    path = cache / f"{entry['name']}.obj"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part = mbs.build_part(dict(entry, noise=0.0))
+        igl.write_triangle_mesh(str(path), np.asarray(part.V, np.float64),
+                                np.asarray(part.F, np.int64))
+    return str(path)
+
+
+def _reason(text: str | None) -> str:
+    """A faceted segment's reason without its numbers ("surface deviates", ...)."""
+    return re.split(r"[ (;:]+[-+]?[0-9.]", text or "?")[0].strip()
+
+
+def score_run(setdir: Path, out: Path, cache: Path) -> dict:
+    """Per part name: the metrics above (cached in ``out/cad_score.json``)."""
+    manifest = {p["name"]: p for p in json.loads((setdir / "manifest.json").read_text())["parts"]}
+    path = out / "cad_score.json"
+    scores = json.loads(path.read_text()) if path.exists() else {}
+    for d in sorted(p for p in out.iterdir() if (p / "report.json").exists()):
+        if d.name in scores or d.name not in manifest:
+            continue
+        rep = json.loads((d / "report.json").read_text())
+        cad, entry = rep["cad"], manifest[d.name]
+        fid = cad["fidelity"]
+        faceted = [f for f in cad["faces"] if f["status"] != "built"]
+        row = dict(segments=len(cad["faces"]), faceted=len(faceted),
+                   reasons=dict(collections.Counter(_reason(f["reason"]) for f in faceted)),
+                   solid=bool(fid["valid"] and fid["solids"] >= 1 and fid["free_edges"] == 0),
+                   hausdorff=fid["hausdorff_rel"], volume=fid["volume_rel_error"],
+                   seconds=rep["timings"]["total"], to_part=fid["hausdorff_rel"])
+        if entry["noise"] and fid["hausdorff_rel"] is not None:
+            from igl_heatseg.cad import brep_fidelity, read_step
+            from igl_heatseg.io import load_mesh
+
+            ref = load_mesh(_clean_mesh(entry, cache))
+            row["to_part"] = brep_fidelity(read_step(d / "model.step"), ref.V,
+                                           ref.F)["hausdorff_rel"]
+        scores[d.name] = row
+        path.write_text(json.dumps(scores, indent=1) + "\n")
+    return scores
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{100 * x:.2f}"
+
+
+def _ok(x) -> bool:
+    return x is not None and x <= BAR
+
+
+def summary(scores: dict) -> dict:
+    """Totals and bars of one run."""
+    reasons = collections.Counter()
+    for r in scores.values():
+        reasons.update(r["reasons"])
+    return {"parts": len(scores),
+            "faceted segments": f"{sum(r['faceted'] for r in scores.values())} / "
+                                f"{sum(r['segments'] for r in scores.values())}",
+            "parts without a faceted segment": sum(r["faceted"] == 0 for r in scores.values()),
+            "valid closed solids": sum(r["solid"] for r in scores.values()),
+            "Hausdorff <= 0.5 % to the mesh": sum(_ok(r["hausdorff"]) for r in scores.values()),
+            "Hausdorff <= 0.5 % to the part": sum(_ok(r["to_part"]) for r in scores.values()),
+            "volume error <= 0.5 %": sum(_ok(r["volume"]) for r in scores.values()),
+            "seconds (sum)": round(sum(r["seconds"] for r in scores.values()), 1),
+            "parts over 30 s": sum(r["seconds"] > 30 for r in scores.values()),
+            "faceted by reason": dict(reasons.most_common())}
+
+
+def _cell(r: dict | None) -> str:
+    if r is None:
+        return "missing"
+    return (f"faceted {r['faceted']:3d}/{r['segments']:3d} {'solid' if r['solid'] else 'no solid'}"
+            f" H {_pct(r['hausdorff'])} to part {_pct(r['to_part'])} vol {_pct(r['volume'])}"
+            f" {r['seconds']:.0f} s")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("set", type=Path, help="the set's folder (with manifest.json)")
+    ap.add_argument("runs", type=Path, nargs="+", help="one or two batch output folders")
+    ap.add_argument("--clean", type=Path, default=None,
+                    help="cache of noise-free meshes (default: SET/../clean)")
+    args = ap.parse_args(argv)
+    cache = args.clean or args.set.parent / "clean"
+    runs = [score_run(args.set, out, cache) for out in args.runs[:2]]
+    keys = ("faceted", "solid", "hausdorff", "to_part", "volume")
+    for name in sorted(set().union(*runs)):
+        rows = [run.get(name) for run in runs]
+        changed = len(rows) == 2 and (None in rows or any(rows[0][k] != rows[1][k]
+                                                          for k in keys))
+        if len(rows) == 1 or changed:
+            print(f"{name:42s} " + " | ".join(_cell(r) for r in rows))
+    for out, run in zip(args.runs, runs, strict=False):
+        print(f"\n{out}:")
+        for k, v in summary(run).items():
+            print(f"  {k}: {v}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

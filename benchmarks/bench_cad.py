@@ -107,13 +107,14 @@ def ensure_m2c(venv: Path) -> Path:
     return exe
 
 
-def _clean_part(entry: dict, work: Path) -> str:
+def clean_mesh(entry: dict, folder: Path) -> str:
     """The noise-free tessellation of a generated noisy part (same seed and mesh, noise 0:
-    ``make_parts`` adds the noise after meshing), written once to ``WORK/clean``."""
+    ``make_parts`` adds the noise after meshing), written once to ``folder/NAME.obj``
+    (``cad_batch_score.py`` uses it too)."""
     import igl
     import make_benchmark_sets as mbs
 
-    path = work / "clean" / f"{entry['name']}.obj"
+    path = folder / f"{entry['name']}.obj"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
         part = mbs.build_part(dict(entry, noise=0.0))
@@ -135,7 +136,7 @@ def list_parts(which: str, work: Path) -> list[dict]:
             continue
         out.append(dict(name=p["name"], obj=str(VALIDATION / p["obj"]),
                         true_faces=p["true_faces"], triangles=p["faces"], noise=p["noise"],
-                        clean=_clean_part(p, work) if p["noise"] else None))
+                        clean=clean_mesh(p, work / "clean") if p["noise"] else None))
     if which == "subset":
         out.sort(key=lambda p: SUBSET.index(p["name"]))
     abc = work / "abc"

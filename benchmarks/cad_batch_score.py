@@ -5,7 +5,7 @@ validation set's, beside mesh2cad).
 Per part, from ``OUT/NAME/report.json`` and ``model.step``: segments and faceted segments,
 a valid closed solid (BRepCheck, a solid, no free edge), the two-sided Hausdorff distance to
 the mesh (the report's) and to the part (to the noise-free mesh of a noisy part, rebuilt from
-the set's ``manifest.json`` as ``bench_cad.score`` does), the volume error and the seconds.
+the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error and the seconds.
 Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
 The scores are cached in ``OUT/cad_score.json``.
 
@@ -31,21 +31,6 @@ sys.path[:0] = [str(_HERE), str(_HERE.parent / "tools")]
 BAR = 0.005
 
 
-def _clean_mesh(entry: dict, cache: Path) -> str:
-    """The noise-free tessellation of a generated part, written once under ``cache``."""
-    import igl
-    import make_benchmark_sets as mbs
-    import numpy as np
-
-    path = cache / f"{entry['name']}.obj"
-    if not path.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        part = mbs.build_part(dict(entry, noise=0.0))
-        igl.write_triangle_mesh(str(path), np.asarray(part.V, np.float64),
-                                np.asarray(part.F, np.int64))
-    return str(path)
-
-
 def _reason(text: str | None) -> str:
     """A faceted segment's reason without its numbers ("surface deviates", ...)."""
     return re.split(r"[ (;:]+[-+]?[0-9.]", text or "?")[0].strip()
@@ -69,10 +54,12 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
                    hausdorff=fid["hausdorff_rel"], volume=fid["volume_rel_error"],
                    seconds=rep["timings"]["total"], to_part=fid["hausdorff_rel"])
         if entry["noise"] and fid["hausdorff_rel"] is not None:
+            from bench_cad import clean_mesh
+
             from igl_heatseg.cad import brep_fidelity, read_step
             from igl_heatseg.io import load_mesh
 
-            ref = load_mesh(_clean_mesh(entry, cache))
+            ref = load_mesh(clean_mesh(entry, cache))
             row["to_part"] = brep_fidelity(read_step(d / "model.step"), ref.V,
                                            ref.F)["hausdorff_rel"]
         scores[d.name] = row

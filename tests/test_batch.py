@@ -277,8 +277,14 @@ def test_batch_records_failures_then_skips_what_is_complete(meshes, client, tmp_
     html = (out / "index.html").read_text()
     assert html.index("slow/slow_sphere.obj") < html.index("spheres/s2.obj")  # failures on top
     stamp = {n: (out / by[n]["output"] / "report.json").stat().st_mtime_ns for n in info["good"]}
+    # a batch killed while writing its summary leaves its temporary files: the next run
+    # removes them
+    stale = [out / f".{name}.999999.tmp" for name in ("summary.json", "index.html")]
+    for p in stale:
+        p.write_text("partial")
     # second run: the 16 are skipped, only the 4 failures are tried again
     res2 = run_batch([root], out, client=client, timeout=2.0, progress=False)
+    assert not any(p.exists() for p in stale)
     c2 = res2.counts
     assert (c2.get("skipped"), c2.get("rejected"), c2.get("timeout")) == (16, 3, 1), c2
     assert all(

@@ -26,6 +26,7 @@ from .jobs import job_kind
 from .summary import (
     FAILED_STATUSES,
     counts,
+    remove_stale_temporaries,
     skipped_record,
     write_gallery,
     write_summary,
@@ -346,6 +347,7 @@ def run_batch(
         "started": started,
     }
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)  # of a batch killed while writing its summary
     dashboard = None
 
     def flush(final: bool = False) -> None:

@@ -25,6 +25,7 @@ __all__ = [
     "counts",
     "write_summary",
     "write_gallery",
+    "remove_stale_temporaries",
 ]
 
 #: Summary columns, in order.
@@ -75,10 +76,47 @@ def counts(records) -> dict:
     return c
 
 
+#: The files :func:`_atomic_write` replaces in OUT (``.NAME.PID.tmp`` first).
+SUMMARY_FILES = ("summary.csv", "summary.json", "index.html")
+
+
 def _atomic_write(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
+
+
+def remove_stale_temporaries(out: str | os.PathLike) -> list:
+    """Remove the ``.NAME.PID.tmp`` files of :data:`SUMMARY_FILES` that a batch killed while
+    writing its summary left in ``out`` (call it before a batch writes there).
+
+    Parameters
+    ----------
+    out : path-like
+        The batch's output folder (need not exist).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> d = Path(tempfile.mkdtemp())
+    >>> _ = (d / ".summary.json.123.tmp").write_text("{")
+    >>> [p.name for p in remove_stale_temporaries(d)], sorted(p.name for p in d.iterdir())
+    (['.summary.json.123.tmp'], [])
+    """
+    out = Path(out)
+    gone = []
+    for name in SUMMARY_FILES:
+        for p in out.glob(f".{name}.*.tmp"):
+            if p.is_file():
+                p.unlink(missing_ok=True)
+                gone.append(p)
+    return gone
 
 
 def _fmt(v):

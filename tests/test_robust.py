@@ -300,6 +300,19 @@ def test_coarse_cad_cylinder_gets_its_side_and_two_caps(n):
     assert seg.vertex_labels.shape == (len(V),) and seg.seed_mask.shape == (len(V),)
 
 
+def test_an_exact_cad_export_is_not_denoised_even_when_its_facets_turn():
+    # the median dihedral angle of a 24-facet cylinder is 15 degrees (its strips), over the
+    # 1-degree noise bar; its fanned caps are exactly flat, which no noisy mesh is
+    V, F, truth = cad_cylinder(24)
+    mesh = validate_mesh(V, F)
+    seg = segment_robust(mesh)
+    assert np.array_equal(seg.denoised_V, mesh.V)
+    assert seg.num_segments == 3 and purity(seg.labels, truth) == 1.0
+    # the same cylinder with noise is filtered
+    noisy = validate_mesh(normal_noise(V, F, 0.05), F)
+    assert not np.allclose(segment_robust(noisy).denoised_V, noisy.V)
+
+
 def test_coarse_cube_of_twelve_triangles_gets_six_planes():
     V, F = CUBE_V * [3.0, 2.0, 1.0], CUBE_F
     seg = segment_robust(validate_mesh(V, F))

@@ -6,7 +6,8 @@ labels (``tools/make_parts.py``) and the two ABC parts; see ``benchmarks/segment
 
 Pipeline of :func:`segment_robust`:
 
-1. **Denoise**, when the median dihedral deviation says the mesh is noisy.  Bilateral
+1. **Denoise**, when the median dihedral deviation says the mesh is noisy and no exactly
+   coplanar faces say it is a clean CAD export.  Bilateral
    filtering of the face normals (Zheng et al. 2011: neighbours = faces sharing a vertex,
    spatial Gaussian of the centroid distance with sigma = mean neighbour distance, range
    Gaussian of ``|n_i - n_j|`` with ``sigma_r``), then the vertex update of Sun et al. 2007
@@ -71,7 +72,7 @@ from ..mesh.topology import edge_topology
 from ..surfaces.boundaries import boundary_curves
 from ..surfaces.refine import refine_segmentation
 from ..surfaces.segment_fit import fit_segments
-from ..surfaces.tolerance import vertex_tolerance
+from ..surfaces.tolerance import exact_tessellation, vertex_tolerance
 from .coarse import (
     MAX_SUBDIVIDE,
     STARVED_SHARE,
@@ -374,8 +375,10 @@ def segment_robust(
         seeds.
     denoise : bool, optional
         Bilateral normal filtering and vertex update first (step 1).  Default: only when the
-        median dihedral deviation of the input exceeds :data:`NOISE_FREE_ANGLE` (filtering a
-        clean CAD tessellation only blurs its small chamfers).
+        median dihedral deviation of the input exceeds :data:`NOISE_FREE_ANGLE` and the mesh
+        is not an exact tessellation
+        (:func:`~igl_heatseg.surfaces.tolerance.exact_tessellation`: a coarse CAD export's
+        facets turn by more than a degree, and filtering them only blurs its small chamfers).
     sigma_r : float
         Range sigma of the bilateral filter (on ``|n_i - n_j|``).
     flat_curvature, anisotropy, axis_angle, flat_normal_angle : float
@@ -434,7 +437,7 @@ def segment_robust(
     raw_phi = _dihedral(V, F, topo)
     noise_angle = float(np.median(raw_phi[topo.interior])) if topo.interior.any() else 0.0
     if denoise is None:
-        denoise = noise_angle > NOISE_FREE_ANGLE
+        denoise = noise_angle > NOISE_FREE_ANGLE and not exact_tessellation(V, F)
         log.info("robust: median dihedral deviation %.2f deg", math.degrees(noise_angle))
     if denoise:
         W = denoise_vertices(V, F, bilateral_normals(V, F, sigma_r=sigma_r))

@@ -673,6 +673,32 @@ def test_fit_faces_tries_curved_kinds_when_a_plane_is_near_only_by_distance(seed
     assert abs(s.params["radius"] - 5) < 0.5
 
 
+def test_fit_faces_takes_the_raw_normals_when_the_denoised_ones_tilt_a_narrow_face():
+    """A narrow 45-degree chamfer between two wide planes comes out of the bilateral filter
+    tilted towards them (tuning plate_s1001_frontal_n0.05: about 30 degrees). Its vertices
+    lie on a plane and its own face normals agree with it: a plane, not freeform. The normals
+    of a quarter fillet do not agree with a plane either way (the test above)."""
+    from igl_heatseg.mesh.geometry import face_normals
+    from igl_heatseg.surfaces.segment_fit import fit_faces, normals_agree
+
+    x, y = np.meshgrid(np.linspace(0, 2, 5), np.linspace(0, 20, 21), indexing="ij")
+    V = np.c_[x.ravel(), y.ravel(), x.ravel()]  # the chamfer: z = x, 45 degrees
+    V += np.random.default_rng(0).normal(scale=0.01, size=V.shape)
+    W = V * [1.0, 1.0, 0.27]  # its denoised copy: tilted to 15 degrees
+    idx = np.arange(V.shape[0]).reshape(x.shape)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    faces = np.arange(len(F))
+    s = fit_faces(V, F, faces, 0.05, W=W)
+    assert s.kind == "plane", s.kind
+    FN = face_normals(W, F)
+    assert not normals_agree(V, F, FN, faces, s)  # the tilted normals alone refuse it
+    assert normals_agree(V, F, FN, faces, s, raw=True)
+    # without W the normals come from V: nothing to fall back on, the same answer
+    assert fit_faces(V, F, faces, 0.05).kind == "plane"
+
+
 def _slot_wall(r=4.62, half=23.2, h=9.5, step=math.radians(18.0)):
     """The flat wall of a slot as a coarse CAD export meshes it (two long triangles), with the
     first facet triangle of each round end (one at the bottom, one at the top)."""

@@ -234,7 +234,7 @@ def snap_to_axes(V, F, labels, surfaces, tol: float, W=None, FN=None) -> tuple[l
             for c in coaxial_surfaces(P, N, w, point, axis, area):
                 b = _bic(c.rms, len(P), 1 if c.kind == "cylinder" else 2, floor)
                 if c.rms < best_rms and c.rms <= tol and b < best_bic and \
-                        normals_agree(V, F, FN, faces, c):
+                        normals_agree(V, F, FN, faces, c, raw=W is not None):
                     best, best_rms, best_bic = c, c.rms, b
         if best is not None:
             surfaces[k] = best

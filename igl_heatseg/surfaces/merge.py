@@ -132,7 +132,7 @@ def merge_segments(V, F, labels, tol, fits: dict, rejected: set | None = None, W
         return was is not None and was[0] is fits[a] and was[1] is faces_of[c]
 
     def agree(faces, s) -> bool:
-        return normals_agree(V, F, FNs, faces, s)
+        return normals_agree(V, F, FNs, faces, s, raw=W is not None)
 
     def smooth(a, b) -> bool:
         """The boundary bends less than a crease: facets of one curved surface, maybe."""

@@ -43,7 +43,7 @@ from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
 from .merge import UPGRADE_ANGLE, merge_segments
-from .samples import segment_adjacency, vertex_samples
+from .samples import normal_positions, segment_adjacency, vertex_samples
 from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
@@ -554,7 +554,7 @@ def refine_segmentation(
     F = np.ascontiguousarray(F, dtype=np.int64)
     t0 = time.perf_counter()
     timings = {}
-    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
+    W = normal_positions(V, normals_from)
     TT = _adjacency(F)
     FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)

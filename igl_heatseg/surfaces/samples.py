@@ -12,7 +12,7 @@ from .checks import check_faces, check_mesh
 from .model import Surface
 
 __all__ = [
-    "segment_adjacency",
+    "segment_adjacency", "normal_positions",
     "vertex_samples","face_samples", "face_residuals"]
 
 
@@ -137,6 +137,34 @@ def segment_adjacency(F: np.ndarray, labels: np.ndarray,
     fb = TT.ravel()
     keep = (fb > fa) & (labels[np.maximum(fb, 0)] != labels[fa])
     return fa[keep], fb[keep]
+
+
+def normal_positions(V: np.ndarray, normals_from) -> np.ndarray | None:
+    """The positions face normals come from, as the fits take them (``W``): ``normals_from``
+    as a float64 array, or None when it is absent or equal to ``V`` (robust mode passes an
+    undenoised copy for a clean mesh; with None the fits do not compute its normals twice, as
+    :func:`~igl_heatseg.surfaces.segment_fit.normals_agree`'s ``raw`` fallback would).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    normals_from : (n, 3) array_like of float, or None
+
+    Returns
+    -------
+    (n, 3) float64 or None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.zeros((3, 3))
+    >>> normal_positions(V, V.copy()) is None, normal_positions(V, V + 1).shape
+    (True, (3, 3))
+    """
+    if normals_from is None:
+        return None
+    W = np.ascontiguousarray(normals_from, dtype=np.float64)
+    return None if W.shape == V.shape and np.array_equal(W, V) else W
 
 
 def vertex_samples(V: np.ndarray, F: np.ndarray, faces: np.ndarray, W: np.ndarray | None = None):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..mesh.geometry import face_areas, face_normals
 from .model import SURFACE_KINDS, Surface
-from .samples import vertex_samples
+from .samples import normal_positions, vertex_samples
 from .select import fit_surface
 from .tolerance import vertex_tolerance
 
@@ -436,7 +436,7 @@ def fit_segments(
     """
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
-    W = None if normals_from is None else np.ascontiguousarray(normals_from, dtype=np.float64)
+    W = normal_positions(V, normals_from)
     tol = vertex_tolerance(V, F) if tol is None else float(tol)
     FN = face_normals(V if W is None else W, F)
     k = int(labels.max()) + 1 if len(labels) else 0

@@ -42,7 +42,7 @@ from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
-from .merge import UPGRADE_ANGLE, merge_segments
+from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
 from .segment_fit import (
     GROW_ANGLE,
@@ -66,7 +66,7 @@ from .split import (
     real_split,
 )
 from .strays import shed_strays
-from .tolerance import exact_tessellation, vertex_tolerance
+from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
     "SurfaceSegmentation",
@@ -109,6 +109,15 @@ CORE_EXPLAINS = 0.85
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
+
+#: On a noisy mesh a segment whose surface explains it (RMS within tol) but fits worse than
+#: this x tol fits worse than the merges accept of a union (the noise level tol / K_NOISE times
+#: MERGE_NOISE_RATIO, plus MERGE_NOISE_SLACK x tol): two faces joined smoothly that the heat
+#: fields left as one segment (a plane running tangentially into a cylinder of radius 20 at
+#: noise 0.05: one torus at 0.7 tol). It is split as an unexplained one, with this x tol as the
+#: tolerance; the split must still be real (:func:`~.split.real_split`), so a single noisy
+#: surface whose fit is a little worse stays whole.
+OVERFIT_RATIO = MERGE_NOISE_RATIO / K_NOISE + MERGE_NOISE_SLACK
 
 
 @dataclass
@@ -483,17 +492,36 @@ def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
     return None, None
 
 
+def _overfit(s, tol, exact) -> bool:
+    """A noisy segment its surface explains, but worse than a merge would accept
+    (:data:`OVERFIT_RATIO`)."""
+    return not exact and explains(s, tol) and s.rms > OVERFIT_RATIO * tol
+
+
+def _split_segment(V, F, faces, s, tol, FN, TT, W, ratio, exact, unsplit):
+    """:func:`_split` of one segment fitted by ``s``: an unexplained one at ``tol``, an
+    over-fitted one (:func:`_overfit`) at OVERFIT_RATIO x tol, its parts then refitted at
+    ``tol``."""
+    if not _overfit(s, tol, exact):
+        return _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit)
+    parts, _ = _split(V, F, faces, OVERFIT_RATIO * tol, FN, TT, W, ratio, exact, unsplit)
+    if parts is None:
+        return None, None
+    return parts, [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
+
+
 def _split_unexplained(V, F, labels, fits, tol, TT, W, FN, ratio, exact, unsplit) -> int:
     """Split again the segments that no surface explains after the merges, moves and cuts
     (:func:`_split`; they mix faces the first split never saw together); labels and fits in
     place. Returns the number of segments split."""
     n = 0
     nxt = int(labels.max()) + 1
-    for k in [k for k, s in fits.items() if not explains(s, tol)]:
+    for k in [k for k, s in fits.items() if not explains(s, tol) or _overfit(s, tol, exact)]:
         faces = np.flatnonzero(labels == k)
         if len(faces) < 2 * MIN_REGION_FACES:
             continue
-        parts, part_fits = _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit)
+        parts, part_fits = _split_segment(V, F, faces, fits[k], tol, FN, TT, W, ratio, exact,
+                                          unsplit)
         for r, (part, fr) in enumerate(zip(parts or [], part_fits or [], strict=True)):
             lab = k if r == 0 else nxt
             nxt += r > 0
@@ -583,8 +611,10 @@ def refine_segmentation(
                 on = corner_rms(V, F, faces, s_core) <= GROW_TOL * tol
                 if explains(s_core, tol) and A[on].sum() >= CORE_EXPLAINS * A.sum():
                     s = s_core
-        if split and not explains(s, tol) and len(faces) >= 2 * MIN_REGION_FACES:
-            parts, part_fits = _split(V, F, faces, tol, FN, TT, W, split_ratio, exact, unsplit)
+        if split and len(faces) >= 2 * MIN_REGION_FACES and (
+                not explains(s, tol) or _overfit(s, tol, exact)):
+            parts, part_fits = _split_segment(V, F, faces, s, tol, FN, TT, W, split_ratio,
+                                              exact, unsplit)
             if parts is not None:
                 n_split += 1
                 for r, (part, fr) in enumerate(zip(parts, part_fits, strict=True)):

@@ -10,7 +10,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    cylinder looks planar; the refit on the grown region finds the cylinder). On an exact
    tessellation, the faces off their segment's surface and the faces of tiny segments are then
    gathered and grown again (:func:`_regrow_strays`): a chamfer one triangle wide, which the
-   heat fields deal out between its two neighbours, becomes one cone.
+   heat fields deal out between its two neighbours, becomes one cone. On a noisy mesh a segment
+   whose surface explains it but fits worse than a merge accepts of a union
+   (:data:`OVERFIT_RATIO`) is split too, at that tighter tolerance: two faces joined smoothly.
 3. **Merge** adjacent segments that one surface explains within tolerance, cheapest union first
    (Attene et al. 2006): strips of a coarse cylinder, a plane split by noise
    (:mod:`~igl_heatseg.surfaces.merge`).

@@ -310,3 +310,16 @@ def test_warnings_before_an_error_fold_into_its_one_line(tmp_path, capsys, monke
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert "factorization" in err[0] and "after the warning: heat fields sum" in err[0]
+
+
+@pytest.mark.parametrize("command, default", [("run", "paper"), ("segment", "paper"),
+                                              ("cad", "robust")])
+def test_help_names_each_commands_own_default_mode(command, default):
+    from igl_heatseg.cli import build_parser
+
+    sub = build_parser()._subparsers._group_actions[0].choices[command]
+    assert sub.get_default("mode") == default
+    text = " ".join(sub.format_help().split())
+    marks = {"paper": "paper: the paper's method, faithful (default)", "robust": "robust (default)"}
+    assert marks[default] in text
+    assert marks["robust" if default == "paper" else "paper"] not in text

@@ -87,8 +87,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("mesh", help="input mesh file")
     p.add_argument("-o", "--out", required=True, metavar="DIR", help="output directory")
-    add_segment_arguments(p)
-    p.set_defaults(mode="robust")
+    add_segment_arguments(p, mode="robust")
     add_solver_argument(p)
     p.add_argument(
         "--tol",

@@ -70,17 +70,19 @@ class Progress:
         self.stream.flush()
 
 
-def add_segment_arguments(p: argparse.ArgumentParser) -> None:
+def add_segment_arguments(p: argparse.ArgumentParser, mode: str = "paper") -> None:
     """Add ``--mode paper|robust``, ``--theta`` and ``--eps`` to a subparser.
 
-    ``--theta``/``--eps`` default to ``None``: each mode's own default, resolved by
+    ``mode`` is the subcommand's default mode (named in the help). ``--theta``/``--eps``
+    default to ``None``: each mode's own default, resolved by
     :func:`igl_heatseg.segmentation.params.resolve_params` (the one place they are checked).
     """
+    paper, robust = (" (default)", "") if mode == "paper" else ("", " (default)")
     p.add_argument(
         "--mode",
         choices=MODES,
-        default="paper",
-        help="paper: the paper's method, faithful (default); robust: for noisy scans and "
+        default=mode,
+        help=f"paper: the paper's method, faithful{paper}; robust{robust}: for noisy scans and "
         "blends (denoised normals, curvature-class seeds, part-relative eps, primitive "
         "merging), with one fitted surface per segment (report.json `surfaces`, segmented.ply "
         "surface_type; the segments are refined by the fits: `segment --refine/--no-refine`)",

@@ -280,6 +280,28 @@ def test_freeform_height_field_one_bspline_face():
         assert _face_normal_z(face) > 0  # the mesh normals point up (+z)
 
 
+def test_freeform_annulus_gets_one_bspline_face_over_its_projection():
+    # a bumpy ring around a hole: no disk chart, but a height field over the xy plane
+    nr, nt = 6, 80  # 40 facets around: the polygon's chords alone are 0.006 off a circle
+    r = np.linspace(1.0, 2.0, nr + 1)
+    t = np.linspace(0, 2 * np.pi, nt + 1)[:-1]
+    R, T = (a.ravel() for a in np.meshgrid(r, t, indexing="ij"))
+    V = np.c_[R * np.cos(T), R * np.sin(T), 0.1 * np.sin(3 * T) * (R - 1) + 0.05 * R**2]
+    idx = np.arange(len(V)).reshape(nr + 1, nt)
+    a, b = idx[:-1], idx[1:]
+    c, d = np.roll(b, -1, axis=1), np.roll(a, -1, axis=1)
+    F = np.r_[np.c_[a.ravel(), b.ravel(), c.ravel()], np.c_[a.ravel(), c.ravel(), d.ravel()]]
+    surfs = [Surface("freeform", {"centroid": V.mean(axis=0)})]
+    tol = 5e-3
+    res = build_brep(V, F.astype(np.int64), np.zeros(len(F), np.int64), surfs, tol=tol)
+    fid = res.fidelity
+    assert res.faces[0]["status"] == "built", res.faces
+    assert fid["valid"] and fid["faces"] == 1
+    assert face_types(res.shape) == ["GeomAbs_BSplineSurface"]
+    assert fid["hausdorff"] < 2 * tol
+    assert _face_normal_z(faces_of(res.shape)[0]) > 0  # the mesh normals point up (+z)
+
+
 def test_noisy_cube_still_closes():
     V, F, labels = box_mesh(6)
     rng = np.random.default_rng(3)

@@ -32,7 +32,7 @@ from .geometry import DEG_MIN, any_perp  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["disk_chart", "segment_chart", "orient_chart", "freeform_surface"]
+__all__ = ["disk_chart", "projection_chart", "segment_chart", "orient_chart", "freeform_surface"]
 
 #: Highest degree of a freeform patch: cubic; higher degrees let the approximation meet its
 #: tolerance at the grid points while oscillating between them (measured: errors of 3 units
@@ -99,6 +99,56 @@ def disk_chart(V: np.ndarray, F: np.ndarray):
     return UV
 
 
+def projection_chart(V: np.ndarray, F: np.ndarray):
+    """A chart of a segment that is a height field over a plane: its orthogonal projection.
+
+    For segments :func:`disk_chart` cannot map (an annulus, a face with holes): a fillet ring
+    around a hole, a nearly flat face with bosses cut out. The projection planes tried are
+    normal to the segment's area-weighted mean face normal, then to its vertices' direction of
+    least spread; the first whose projection is certified bijective
+    (:func:`~igl_heatseg.parameterization.bijectivity.certify_map`: no flipped or degenerate
+    triangle, no boundary overlap) is returned, rotated to its minimum-area rectangle.
+
+    Parameters
+    ----------
+    V : (p, 3) float64
+    F : (q, 3) int64
+        The segment, compact vertex indices.
+
+    Returns
+    -------
+    UV : (p, 2) float64 or None
+        Counter-clockwise as in :func:`orient_chart`; None when no projection is one-to-one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 2 * np.pi, 13)[:-1]
+    >>> ring = np.r_[np.c_[np.cos(t), np.sin(t)], 2 * np.c_[np.cos(t), np.sin(t)]]
+    >>> V = np.c_[ring, 0.1 * (ring ** 2).sum(axis=1)]          # a bowl with a hole
+    >>> i = np.arange(12); j = (i + 1) % 12
+    >>> F = np.r_[np.c_[i, j, j + 12], np.c_[i, j + 12, i + 12]]
+    >>> disk_chart(V, F) is None, projection_chart(V, F).shape
+    (True, (24, 2))
+    """
+    from ..parameterization.bijectivity import certify_map
+
+    FN = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])  # area-weighted
+    normals = [FN.sum(axis=0)]
+    if len(V) >= 3:
+        normals.append(np.linalg.svd(V - V.mean(axis=0), full_matrices=False)[2][-1])
+    for n in normals:
+        length = float(np.linalg.norm(n))
+        if not length > 0:
+            continue
+        n = n / length
+        e1 = any_perp(n)
+        UV = orient_chart((V - V.mean(axis=0)) @ np.c_[e1, np.cross(n, e1)], F)
+        if UV is not None and certify_map(UV, F).bijective:
+            return orient_chart(_align(UV), F)
+    return None
+
+
 def segment_chart(s, V: np.ndarray, F: np.ndarray):
     """A chart of a segment whose analytic surface deviates from it, for a B-spline fit.
 
@@ -114,8 +164,8 @@ def segment_chart(s, V: np.ndarray, F: np.ndarray):
     -------
     UV : (p, 2) float64 or None
         For a plane, the points in the plane's frame (a chart with any number of holes);
-        otherwise :func:`disk_chart`. Counter-clockwise as in :func:`orient_chart`; None when
-        the projection folds or the segment is no disk.
+        otherwise :func:`disk_chart`, else (no disk) :func:`projection_chart`.
+        Counter-clockwise as in :func:`orient_chart`; None when no chart is one-to-one.
 
     Examples
     --------
@@ -128,7 +178,8 @@ def segment_chart(s, V: np.ndarray, F: np.ndarray):
     (True, [1.0, 1.0])
     """
     if s.kind != "plane":
-        return disk_chart(V, F)
+        UV = disk_chart(V, F)
+        return projection_chart(V, F) if UV is None else UV
     n = s.params["normal"]
     e1 = any_perp(n)
     Q = V - s.params["point"]

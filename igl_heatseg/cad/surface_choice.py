@@ -32,7 +32,8 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
     above ``misfit``, is replaced, when ``bspline``, by a B-spline fitted over the segment's
     chart (:func:`~igl_heatseg.cad.freeform.segment_chart`); in the second case only when the
     B-spline is the closer of the two. ``notes[a]`` then says why (for the report). A
-    freeform segment gets a B-spline over its chart in ``uv`` (else a harmonic disk chart).
+    freeform segment gets a B-spline over its chart in ``uv`` (else a disk chart, or a
+    one-to-one projection onto a plane for a segment with holes).
 
     Parameters
     ----------
@@ -120,7 +121,10 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
     else:
         UV = freeform.disk_chart(V[verts], Fl)
         if UV is None:
-            return None, None, math.nan, "freeform segment is not a disk and has no chart"
+            UV = freeform.projection_chart(V[verts], Fl)
+        if UV is None:
+            return None, None, math.nan, ("freeform segment is not a disk and no projection "
+                                          "onto a plane is one-to-one")
     geom, err = freeform.freeform_surface(V[verts], Fl, UV, tol)
     if geom is None or err > tol:
         return None, None, err, f"B-spline fit error {err:.3g} above tol {tol:.3g}"

@@ -74,3 +74,45 @@ def test_a_segment_is_not_cut_apart():
     assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 0
     assert np.array_equal(labels, before)
     assert len(np.unique(label_pieces(F, labels, TT)[labels == 0])) == 1
+
+
+def _prism_with_roof(turn_deg: float):
+    """A strip of faces: floor (2 big triangles), then two roof facets each turning by
+    ``turn_deg`` from the last, as a coarse export of a rounded edge would have."""
+    t1, t2 = np.radians(turn_deg), np.radians(2 * turn_deg)
+    P = [np.array([0.0, 0.0]), np.array([10.0, 0.0])]
+    P.append(P[-1] + np.array([np.cos(t1), np.sin(t1)]))
+    P.append(P[-1] + np.array([np.cos(t2), np.sin(t2)]))
+    V = np.array([[x, y, z] for z in (0.0, 3.0) for x, y in P])
+    n = len(P)
+    F = []
+    for i in range(n - 1):  # quad (i, i+1) x (bottom, top)
+        F += [[i, i + 1, n + i + 1], [i, n + i + 1, n + i]]
+    return V, np.array(F, dtype=np.int64)
+
+
+def test_split_at_creases_small_piece_across_a_crease_becomes_its_own_segment():
+    from igl_heatseg.surfaces.strays import split_at_creases
+
+    V, F = _prism_with_roof(60.0)  # 60 degrees per facet: creases
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    area = 0.5 * igl.doublearea(V, F)
+    labels = np.array([0, 0, 0, 0, 1, 1])  # the first roof facet wrongly with the floor
+    out, moved = split_at_creases(F, labels, TT, FN, area)
+    # it joins segment 1 only across a crease too: a segment of its own
+    assert moved == 2 and out.tolist() == [0, 0, 2, 2, 1, 1]
+
+
+def test_split_at_creases_keeps_large_pieces_and_smooth_turns():
+    from igl_heatseg.surfaces.strays import split_at_creases
+
+    for turn in (30.0, 60.0):
+        V, F = _prism_with_roof(turn)
+        TT = igl.triangle_triangle_adjacency(F)[0]
+        FN = igl.per_face_normals(V, F, np.zeros(3))
+        area = 0.5 * igl.doublearea(V, F)
+        labels = np.array([0, 0, 1, 1, 1, 1])  # the rounded edge's two facets: one segment
+        out, moved = split_at_creases(F, labels, TT, FN, area)
+        # 30 degrees is no crease; at 60 each facet is half the segment: both stay
+        assert moved == 0 and out.tolist() == labels.tolist()

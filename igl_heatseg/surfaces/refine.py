@@ -23,7 +23,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
-   neighbours that fit them, so a freeform neighbour's triangle stayed).
+   neighbours that fit them, so a freeform neighbour's triangle stayed). On an exact
+   tessellation, small pieces a segment holds only across creases leave it
+   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
@@ -67,7 +69,7 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import shed_strays
+from .strays import shed_strays, split_at_creases
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -139,7 +141,7 @@ class SurfaceSegmentation:
     merged : int
         Merges of adjacent segments (step 3).
     moved : int
-        Boundary faces moved (step 4).
+        Boundary faces moved (steps 4 and 6).
     timings : dict
     coaxial : int
         Planes retyped as cylinders or cones about the part's axes
@@ -668,6 +670,9 @@ def refine_segmentation(
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
+    if exact:  # no segment of a CAD tessellation runs across a crease
+        labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F))
+        moved += crease_moved
     timings["shards"] = time.perf_counter() - t
 
     t = time.perf_counter()

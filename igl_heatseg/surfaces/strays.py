@@ -15,8 +15,9 @@ import numpy as np
 
 from ..mesh.topology import label_pieces
 from .segment_fit import corner_rms, normal_angle
+from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays"]
+__all__ = ["shed_strays", "split_at_creases"]
 
 #: A border face is a stray when its normal is more than this angle from its surface's ...
 STRAY_ANGLE = math.radians(60.0)
@@ -26,6 +27,82 @@ STRAY_TOL = 2.0
 
 #: Passes (a stray behind a stray is on the border after the first one has gone).
 STRAY_PASSES = 3
+
+#: split_at_creases: a piece of a segment joined to the rest only across creases leaves it when
+#: its area is at most this share of the segment's (a two-facet fillet's halves stay).
+CREASE_PIECE_SHARE = 0.15
+
+
+def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.ndarray,
+                     area: np.ndarray) -> tuple[np.ndarray, int]:
+    """Segments of an exact tessellation cut at their inner creases; small pieces leave.
+
+    On a CAD tessellation a crease (faces turning by more than
+    :data:`~igl_heatseg.surfaces.tolerance.CREASE_ANGLE`) is where two faces of the part meet,
+    so the faces of one segment joined only across a crease belong to two faces: fandisk's
+    large freeform segment held a five-triangle strip of its neighbour folded across the crease,
+    a coarse gear's flank segment the two triangles of its tooth's tip land. Each segment's
+    largest crease-free piece keeps it; a piece of at most :data:`CREASE_PIECE_SHARE` of the
+    segment's area goes to the neighbouring segment it joins across the most smooth edges, or
+    becomes a segment of its own when it joins none smoothly.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+    TT : (m, 3) int64
+        Face adjacency (-1 on a border).
+    FN : (m, 3) float64
+        Unit face normals.
+    area : (m,) float64
+        Face areas.
+
+    Returns
+    -------
+    labels : (m,) int64
+        A new array (new segments numbered after the largest label).
+    moved : int
+        Faces that changed segment.
+
+    Examples
+    --------
+    >>> import numpy as np, igl
+    >>> V = np.array([[0., 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0], [0, 0, 1], [4, 0, 1]])
+    >>> F = np.array([[0, 1, 2], [0, 2, 3], [1, 0, 4], [1, 4, 5]])  # a floor and a wall
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> FN = igl.per_face_normals(V, F, np.zeros(3))
+    >>> split_at_creases(F, np.zeros(4, np.int64), TT, FN, np.array([8., 8, .5, .5]))
+    (array([0, 0, 1, 1]), 2)
+    """
+    ok = TT >= 0
+    cos = np.einsum("fkj,fj->fk", FN[np.where(ok, TT, 0)], FN)
+    crease = ok & (cos < math.cos(CREASE_ANGLE))
+    pieces = label_pieces(F, labels, np.where(crease, -1, TT))
+    piece_area = np.bincount(pieces, weights=area)
+    seg_area = np.bincount(labels, weights=area)
+    out = labels.copy()
+    nxt = int(labels.max()) + 1
+    moved = 0
+    for lab in np.unique(labels):
+        ps = np.unique(pieces[labels == lab])
+        if len(ps) < 2:
+            continue
+        keep = ps[np.argmax(piece_area[ps])]
+        for p in ps:
+            if p == keep or piece_area[p] > CREASE_PIECE_SHARE * seg_area[lab]:
+                continue
+            fp = np.flatnonzero(pieces == p)
+            nb = TT[fp]
+            others = labels[nb[(nb >= 0) & ~crease[fp]]]
+            others = others[others != lab]
+            if len(others):
+                vals, counts = np.unique(others, return_counts=True)
+                out[fp] = vals[np.argmax(counts)]
+            else:
+                out[fp] = nxt
+                nxt += 1
+            moved += len(fp)
+    return out, moved
 
 
 def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: float,

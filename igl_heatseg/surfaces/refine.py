@@ -672,6 +672,8 @@ def refine_segmentation(
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if exact:  # no segment of a CAD tessellation runs across a crease
         labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F))
+        if crease_moved:  # a piece sent to a neighbour's piece that left too is cut off
+            labels = label_pieces(F, labels, TT)
         moved += crease_moved
     timings["shards"] = time.perf_counter() - t
 

@@ -1074,3 +1074,14 @@ def test_model_broken_by_a_narrow_face_is_built_again_without_it(monkeypatch):
     assert not res.faceted_model and res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert [f["index"] for f in res.not_built] == [2]
     assert res.faces[2]["reason"].startswith("trimmed face area")
+
+
+def test_faceted_patch_skips_a_triangle_with_a_side_within_the_tolerance():
+    from igl_heatseg.cad.faceted import triangle_faces
+
+    # vertices 1 and 2 lie 1e-7 apart: no edge joins them within a vertex tolerance of 1e-6,
+    # yet triangle (0, 1, 2) has an area well above the degenerate-area test's
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1e-7, 0], [0, 1, 0], [1, 1, 0]])
+    F = np.array([[0, 1, 2], [0, 2, 3], [2, 4, 3]])
+    faces = triangle_faces(V, F, 1e-6)  # raised StdFail_NotDone before
+    assert len(faces) == 2

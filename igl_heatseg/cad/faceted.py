@@ -21,7 +21,8 @@ logger = logging.getLogger(__name__)
 __all__ = ["triangle_faces"]
 
 #: Triangles with a doubled area below this fraction of the squared bbox diagonal are skipped
-#: (OCC cannot make a plane through them; the sewing closes the sliver).
+#: (OCC cannot make a plane through them; the sewing closes the sliver), and so are those with
+#: a side whose ends lie within the vertex tolerance of each other (OCC makes no such edge).
 DEGENERATE_AREA_REL = 1e-14
 
 
@@ -55,20 +56,29 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
         key = (min(i, j), max(i, j))
         if key not in edges:
             a, b = key
-            edges[key] = BRepBuilderAPI_MakeEdge(vertex(a), vertex(b)).Edge()
+            mk = BRepBuilderAPI_MakeEdge(vertex(a), vertex(b))
+            edges[key] = mk.Edge() if mk.IsDone() else None  # ends within the tolerance
         e = edges[key]
-        return e if i < j else e.Reversed()
+        return e if e is None or i < j else e.Reversed()
 
+    skipped = 0
     for tri in np.asarray(F, dtype=np.int64).tolist():
         a, b, c = V[tri]
         if np.sum(np.cross(b - a, c - a) ** 2) <= (DEGENERATE_AREA_REL * diag2) ** 2:
             continue
+        sides = [edge(i, j) for i, j in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0]))]
+        if any(e is None for e in sides):  # a side shorter than the tolerance: a sliver
+            skipped += 1
+            continue
         w = TopoDS_Wire()
         builder.MakeWire(w)
-        for i, j in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
-            builder.Add(w, edge(i, j))
+        for e in sides:
+            builder.Add(w, e)
         w.Closed(True)
         mk = BRepBuilderAPI_MakeFace(w, True)
         if mk.IsDone():
             faces.append(mk.Face())
+    if skipped:
+        logger.info("faceted patch: %d triangle(s) with a side shorter than the tolerance "
+                    "skipped (the sewing closes them)", skipped)
     return faces

@@ -141,9 +141,7 @@ def projection_chart(V: np.ndarray, F: np.ndarray):
         length = float(np.linalg.norm(n))
         if not length > 0:
             continue
-        n = n / length
-        e1 = any_perp(n)
-        UV = orient_chart((V - V.mean(axis=0)) @ np.c_[e1, np.cross(n, e1)], F)
+        UV = orient_chart(_in_plane(V, V.mean(axis=0), n / length), F)
         if UV is not None and certify_map(UV, F).bijective:
             return orient_chart(_align(UV), F)
     return None
@@ -180,10 +178,15 @@ def segment_chart(s, V: np.ndarray, F: np.ndarray):
     if s.kind != "plane":
         UV = disk_chart(V, F)
         return projection_chart(V, F) if UV is None else UV
-    n = s.params["normal"]
+    return orient_chart(_in_plane(V, s.params["point"], s.params["normal"]), F)
+
+
+def _in_plane(V: np.ndarray, point: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Coordinates ``(p, 2)`` of the points in a frame of the plane through ``point`` with
+    unit normal ``n`` (orthogonal projection)."""
     e1 = any_perp(n)
-    Q = V - s.params["point"]
-    return orient_chart(np.c_[Q @ e1, Q @ np.cross(n, e1)], F)
+    Q = V - point
+    return np.c_[Q @ e1, Q @ np.cross(n, e1)]
 
 
 def _align(UV: np.ndarray) -> np.ndarray:

@@ -619,7 +619,7 @@ def test_face_read_back_out_of_place_is_named_by_its_vertices():
 
 def test_invalid_segments_names_the_segment_of_an_invalid_face():
     from OCP.BRep import BRep_Builder
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
     from OCP.BRepCheck import BRepCheck_Analyzer
     from OCP.BRepTools import BRepTools
     from OCP.Geom import Geom_Plane
@@ -642,8 +642,22 @@ def test_invalid_segments_names_the_segment_of_an_invalid_face():
         builder.Add(shape, f)
     built = [dict(status="built")] * 6
     assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5], built) == {5}
-    # the invalid face is a faceted segment's: its built neighbours are to blame, if any
+    # the invalid face is a faceted segment's: the built faces it touches are to blame (the
+    # four sides around good[0], not the opposite one) ...
     faceted = built[:5] + [dict(status="faceted")]
+    opposite = -_centroid(good[0])
+    sides = {i for i, f in enumerate(good[1:]) if np.linalg.norm(_centroid(f) - opposite) > 0.5}
+    assert len(sides) == 4
+    assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5], faceted) == sides
+    # ... and when it touches none, its segment's built neighbours, if any
+    loose = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakePolygon(
+        gp_Pnt(0, 0, 1), gp_Pnt(0.5, 0, 1), gp_Pnt(0.5, 0.5, 1), True).Wire(), True).Face()
+    assert not BRepCheck_Analyzer(loose).IsValid()
+    faces = good[1:] + [loose]
+    shape = TopoDS_Compound()
+    builder.MakeCompound(shape)
+    for f in faces:
+        builder.Add(shape, f)
     assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5], faceted) is None
     assert _invalid_segments(shape, faces, [0, 1, 2, 3, 4, 5], faceted,
                              {5: {0, 1, 5}}) == {0, 1}
@@ -758,6 +772,63 @@ def _centroid(face) -> np.ndarray:
     BRepGProp.SurfaceProperties_s(face, props)
     c = props.CentreOfMass()
     return np.array([c.X(), c.Y(), c.Z()])
+
+
+@pytest.mark.parametrize("at, blamed", [((0.83, 0.17), {2}), ((-0.33, -0.17), {2, 3, 4, 5})])
+def test_an_invalid_faceted_triangle_facets_only_the_built_faces_it_touches(monkeypatch, at,
+                                                                           blamed):
+    """Side 0 of a cube is faceted; one of its triangles fails the check. A triangle on the
+    x = 1 edge facets side 2 alone (it touches no other built face), not every built side
+    around side 0 (plate_s1012 with a noisy plane built: one triangle cost 18 faces); an
+    interior triangle, touching no built face, still blames every built neighbour."""
+    import igl_heatseg.cad.build as build_mod
+
+    real_surface_for = build_mod.surface_choice.surface_for
+
+    def side_0_faceted(a, *args, **kwargs):
+        return (None, None, 1.0, "faceted for the test") if a == 0 else real_surface_for(
+            a, *args, **kwargs)
+
+    calls = []
+
+    def one_triangle_invalid(shape, valid=None):
+        calls.append(1)
+        if len(calls) > 1:
+            return []
+        target = np.array([at[0], at[1], 1.0])
+        return [min(faces_of(shape), key=lambda f: np.linalg.norm(_centroid(f) - target))]
+
+    monkeypatch.setattr(build_mod.surface_choice, "surface_for", side_0_faceted)
+    monkeypatch.setattr(build_mod, "_invalid_faces", one_triangle_invalid)
+    V, F, labels = box_mesh(4)
+    inner = (np.abs(V[:, 2] - 1) < 1e-9) & np.all(np.abs(V[:, :2]) < 1 - 1e-9, axis=1)
+    V[inner, 2] += np.random.default_rng(0).uniform(0.005, 0.02, inner.sum())  # not coplanar
+    res = build_brep(V, F, labels, box_planes())
+    again = {f["index"] for f in res.faces if f["reason"] == "invalid after sewing (BRepCheck)"}
+    assert again == blamed and len(calls) == 2
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
+def test_a_model_left_open_by_the_narrow_blame_is_built_again_with_the_broad_one(monkeypatch):
+    """When blaming faceted triangles on the built faces they touch leaves a closed mesh
+    without a solid, the model is built again blaming every built segment next to them."""
+    import igl_heatseg.cad.build as build_mod
+
+    real, seen = build_mod._sewn_model, []
+
+    def first_not_a_solid(V, F, labels, surfaces, uv, ctx, *args):
+        seen.append(ctx["touching"])
+        out = real(V, F, labels, surfaces, uv, ctx, *args)
+        if len(seen) == 1:
+            ctx["narrowed"].add(0)
+            return (*out[:5], False)
+        return out
+
+    monkeypatch.setattr(build_mod, "_sewn_model", first_not_a_solid)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes())
+    assert seen == [True, False]
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
 
 
 def test_invalid_model_without_a_segment_to_blame_is_written_faceted(monkeypatch):

@@ -1,5 +1,7 @@
 """Which segments to facet for a defect of the sewn B-Rep: the segment of an invalid or open
-face, or, when that face is a triangle of a faceted patch, the built segments next to it."""
+face, or, when that face is a triangle of a faceted patch, the built segments next to it (the
+built faces it touches in the sewn shape; when it touches none, every built segment next to
+its patch)."""
 
 from __future__ import annotations
 
@@ -11,11 +13,11 @@ from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.collections import (  # noqa: E402
     IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as _AncestorMap,
 )
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
-from OCP.TopExp import TopExp  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX  # noqa: E402
+from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-__all__ = ["surface_owners", "blame", "open_segments"]
+__all__ = ["surface_owners", "blame", "open_segments", "touching_segments"]
 
 
 def surface_owners(faces, owner) -> dict:
@@ -47,7 +49,53 @@ def surface_owners(faces, owner) -> dict:
     return out
 
 
-def blame(f, owners, status, neighbours):
+def touching_segments(shape, owners):
+    """The segments of the faces that share a vertex with a face of a sewn shape.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The sewn shape.
+    owners : dict
+        :func:`surface_owners` of the faces sewn.
+
+    Returns
+    -------
+    callable
+        ``touching(f)``: the set of segments (ints) of the faces of ``shape`` other than
+        ``f`` that share a vertex with ``f`` (a face of ``shape``).
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from igl_heatseg.cad.fidelity import faces_of
+    >>> box = BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()
+    >>> faces = faces_of(box)
+    >>> touching = touching_segments(box, surface_owners(faces, [0, 1, 2, 3, 4, 5]))
+    >>> sorted(touching(faces[0]))            # every face of a box but the opposite one
+    [2, 3, 4, 5]
+    """
+    vmap = _AncestorMap()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_VERTEX, TopAbs_FACE, vmap)
+
+    def touching(f) -> set:
+        out: set = set()
+        ex = TopExp_Explorer(f, TopAbs_VERTEX)
+        while ex.More():
+            v = ex.Current()
+            if vmap.Contains(v):
+                for g in vmap.FindFromKey(v):
+                    if not g.IsSame(f):
+                        a = owners.get(BRep_Tool.Surface_s(TopoDS.Face(g)))
+                        if a is not None:
+                            out.add(a)
+            ex.Next()
+        return out
+
+    return touching
+
+
+def blame(f, owners, status, neighbours, touching=None, narrowed=None):
     """Built segments accountable for a face of a sewn shape.
 
     Parameters
@@ -60,12 +108,18 @@ def blame(f, owners, status, neighbours):
         Per segment, ``status`` is ``"built"`` or ``"faceted"``.
     neighbours : dict of int -> set of int
         Segments sharing an edge with each segment.
+    touching : callable, optional
+        :func:`touching_segments` of the sewn shape.
+    narrowed : set, optional
+        Gets the segment of a triangle whose blame ``touching`` narrowed (fewer segments than
+        without it).
 
     Returns
     -------
     set of int or None
         Its own segment when built, else (a triangle of a faceted segment) the built segments
-        next to it; None when no built segment accounts for it.
+        whose faces it touches (with ``touching``), or when it touches none, the built
+        segments next to its segment; None when no built segment accounts for it.
 
     Examples
     --------
@@ -83,10 +137,16 @@ def blame(f, owners, status, neighbours):
     if status[a]["status"] == "built":
         return {a}
     near = {b for b in (neighbours or {}).get(a, ()) if status[b]["status"] == "built"}
+    if touching is not None:  # the built faces the triangle was sewn to, not all its patch's
+        sewn = {b for b in touching(f) if status[b]["status"] == "built"}
+        if sewn:
+            if narrowed is not None and not near <= sewn:
+                narrowed.add(a)
+            return sewn
     return near or None
 
 
-def open_segments(shape, faces, owner, status, neighbours) -> set:
+def open_segments(shape, faces, owner, status, neighbours, narrow=False, narrowed=None) -> set:
     """Built segments along the free edges of a sewn shape, found as :func:`blame` finds
     them (edges of one face only; seams and degenerate edges are not free).
 
@@ -96,6 +156,11 @@ def open_segments(shape, faces, owner, status, neighbours) -> set:
         The sewn shape.
     faces, owner, status, neighbours
         As for :func:`surface_owners` and :func:`blame`.
+    narrow : bool
+        Blame a faceted triangle's free edge on the built faces the triangle touches
+        (:func:`touching_segments`), not on every built segment next to its patch.
+    narrowed : set, optional
+        As for :func:`blame`.
 
     Returns
     -------
@@ -113,6 +178,7 @@ def open_segments(shape, faces, owner, status, neighbours) -> set:
     amap = _AncestorMap()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
     owners = surface_owners(faces, owner)
+    touching = touching_segments(shape, owners) if narrow else None
     out: set = set()
     for i in range(1, amap.Extent() + 1):
         ancestors = amap.FindFromIndex(i)
@@ -122,5 +188,5 @@ def open_segments(shape, faces, owner, status, neighbours) -> set:
         face = TopoDS.Face(ancestors.First())
         if BRep_Tool.IsClosed_s(edge, face):  # a seam of a periodic face
             continue
-        out |= blame(face, owners, status, neighbours) or set()
+        out |= blame(face, owners, status, neighbours, touching, narrowed) or set()
     return out

@@ -42,6 +42,7 @@ from . import faceted, geometry, periodic, surface_choice  # noqa: E402
 from .blame import blame as _blame  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
+from .blame import touching_segments as _touching_segments  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
@@ -557,20 +558,25 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     timings: dict = {}
     ctx["bspline"], ctx["fallbacks"] = True, set()
     ctx["wide_area"], ctx["widened"] = True, set()
+    ctx["touching"], ctx["narrowed"] = True, set()
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, labels, surfaces, uv, ctx, closed, timings, progress)
-    # (built, allowed, what, also when fully faceted): the faces that may be what broke the
-    # model; it is built again without them, and kept if better (the second rebuild keeps the
-    # first one's choice). A fully faceted model is not built again for the narrow faces: of
-    # the 4 seen, none came out better, at half the time again.
-    for key, allow, what, if_faceted in (
-            ("fallbacks", "bspline", "B-spline stand-ins", True),
+    # (built, allowed, what, how instead, also when fully faceted): the faces that may be what
+    # broke the model; it is built again without them, and kept if better (a rebuild keeps the
+    # earlier ones' choices). A fully faceted model is not built again for the narrow faces:
+    # of the 4 seen, none came out better, at half the time again. The sewing defects of a
+    # faceted patch's triangles are blamed on the built faces they touch; when that leaves no
+    # solid, the model is built again blaming every built segment next to the patch.
+    for key, allow, what, instead, if_faceted in (
+            ("fallbacks", "bspline", "B-spline stand-ins", "without them", True),
             ("widened", "wide_area", "narrow faces that only BOUNDARY_SHIFT's slack admitted",
-             False)):
+             "without them", False),
+            ("narrowed", "touching", "the defects of their faceted triangles blamed on the "
+             "built faces they touch", "blaming every built segment next to them", True)):
         if ctx[key] and ((faceted_model and if_faceted) or (closed and not solid)):
-            logger.warning("the model with %s for segments %s is %s; building it without "
-                           "them", what, sorted(ctx[key]),
-                           "faceted" if faceted_model else "not a solid")
+            logger.warning("the model with %s for segments %s is %s; building it again %s",
+                           what, sorted(ctx[key]),
+                           "faceted" if faceted_model else "not a solid", instead)
             ctx[allow] = False
             again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
             if (not again[3], again[5]) > (not faceted_model, solid):
@@ -609,10 +615,12 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             t = time.perf_counter()
-            bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"])
+            bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
+                                    ctx["touching"], ctx["narrowed"])
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
-                gaps = _open_segments(shape, faces, owner, status, neighbours)
+                gaps = _open_segments(shape, faces, owner, status, neighbours, ctx["touching"],
+                                      ctx["narrowed"])
                 if gaps:
                     logger.warning("the shell keeps %d free edge(s) along segments %s; "
                                    "faceting them", info["free_edges_after_sewing"],
@@ -663,20 +671,24 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
-def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None):
+def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
+                      narrowed=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
     (:func:`_invalid_faces`; ``valid``: the shape's verdict when known): a built segment's own
-    face, or, for an invalid triangle of a faceted segment, the built segments next to it
-    (``neighbours``: segment -> set of adjacent segments), whose edges it was sewn to. [] when
+    face, or, for an invalid triangle of a faceted segment, the built segments whose faces it
+    touches in ``shape`` when ``narrow`` (else, or when it touches none, those next to its
+    segment, ``neighbours``: segment -> set of adjacent segments; ``narrowed`` gets the
+    faceted segments whose blame touching narrowed). [] when
     the shape is valid; None when a face is to blame that no built segment accounts for (a
     unified face, an isolated faceted patch, the shell itself)."""
     bad_faces = _invalid_faces(shape, valid)
     if not bad_faces:
         return bad_faces
     owners = _surface_owners(faces, owner)
+    touching = _touching_segments(shape, owners) if narrow else None
     bad = set()
     for f in bad_faces:
-        who = _blame(f, owners, status, neighbours)
+        who = _blame(f, owners, status, neighbours, touching, narrowed)
         if who is None:
             return None
         bad |= who

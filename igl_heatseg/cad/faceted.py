@@ -26,7 +26,7 @@ __all__ = ["triangle_faces"]
 DEGENERATE_AREA_REL = 1e-14
 
 
-def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
+def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float, return_index: bool = False):
     """Planar faces of triangles, sharing vertices and edges between adjacent triangles.
 
     Parameters
@@ -36,10 +36,23 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
         Triangles (orientation kept: face normals follow the triangle order).
     tol : float
         Vertex and edge tolerance.
+    return_index : bool
+        Also return the row of ``F`` of every face (degenerate triangles make none).
 
     Returns
     -------
-    list of TopoDS_Face
+    faces : list of TopoDS_Face
+    index : (len(faces),) int64
+        Only with ``return_index``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]])
+    >>> faces, index = triangle_faces(V, np.array([[0, 1, 2], [0, 1, 3]]), 1e-7,
+    ...                               return_index=True)
+    >>> len(faces), index.tolist()        # the second triangle has no area
+    (1, [0])
     """
     builder = BRep_Builder()
     verts, edges, faces = {}, {}, []
@@ -61,10 +74,12 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
         e = edges[key]
         return e if e is None or i < j else e.Reversed()
 
-    skipped = 0
-    for tri in np.asarray(F, dtype=np.int64).tolist():
-        a, b, c = V[tri]
-        if np.sum(np.cross(b - a, c - a) ** 2) <= (DEGENERATE_AREA_REL * diag2) ** 2:
+    skipped, index = 0, []
+    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
+    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    flat = np.sum(cross ** 2, axis=1) <= (DEGENERATE_AREA_REL * diag2) ** 2
+    for row, tri in enumerate(F.tolist()):
+        if flat[row]:
             continue
         sides = [edge(i, j) for i, j in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0]))]
         if any(e is None for e in sides):  # a side shorter than the tolerance: a sliver
@@ -78,7 +93,8 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float) -> list:
         mk = BRepBuilderAPI_MakeFace(w, True)
         if mk.IsDone():
             faces.append(mk.Face())
+            index.append(row)
     if skipped:
         logger.info("faceted patch: %d triangle(s) with a side shorter than the tolerance "
                     "skipped (the sewing closes them)", skipped)
-    return faces
+    return (faces, np.asarray(index, dtype=np.int64)) if return_index else faces

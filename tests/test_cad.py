@@ -334,6 +334,31 @@ def test_step_round_trip(tmp_path):
     assert fid["volume"] == pytest.approx(8.0, rel=1e-9)
 
 
+def test_step_file_carries_the_uncertainty_it_is_given(tmp_path):
+    """By default the file's uncertainty is OCC's own (step_uncertainty of the shape); a
+    precision given is written as it is (the round trip writes a part of a model with the
+    whole model's); a precision that is not a positive number is refused."""
+    import re
+
+    from igl_heatseg.cad.step import step_uncertainty
+
+    def written(path):
+        text = open(path).read()
+        return float(re.search(r"UNCERTAINTY_MEASURE_WITH_UNIT\(LENGTH_MEASURE\(([^)]*)\)",
+                               text).group(1))
+
+    V, F, labels = box_mesh(3)
+    V = V * 50.0
+    shape = build_brep(V, F, labels, box_planes(50.0)).shape
+    own = step_uncertainty(shape)
+    assert written(write_step(shape, tmp_path / "a.step")) == pytest.approx(own, rel=1e-9)
+    assert written(write_step(shape, tmp_path / "b.step", precision=0.02)) == 0.02
+    assert written(write_step(shape, tmp_path / "c.step")) == pytest.approx(own, rel=1e-9)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(MeshError, match="precision"):
+            write_step(shape, tmp_path / "d.step", precision=bad)
+
+
 def test_plane_farther_than_the_tolerance_is_built_as_a_bspline_face(tmp_path):
     V, F, labels = box_mesh(3)
     surfs = box_planes()
@@ -791,7 +816,7 @@ def test_an_invalid_faceted_triangle_facets_only_the_built_faces_it_touches(monk
 
     calls = []
 
-    def one_triangle_invalid(shape, valid=None):
+    def one_triangle_invalid(shape, valid=None, exempt=None):
         calls.append(1)
         if len(calls) > 1:
             return []
@@ -807,6 +832,53 @@ def test_an_invalid_faceted_triangle_facets_only_the_built_faces_it_touches(monk
     again = {f["index"] for f in res.faces if f["reason"] == "invalid after sewing (BRepCheck)"}
     assert again == blamed and len(calls) == 2
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+
+
+def test_inner_triangles_of_a_faceted_patch_are_left_out_of_the_step_round_trip(monkeypatch):
+    """Side 0 of a 4 x 4 cube, its inner vertices raised, is faceted (32 triangles, 8 of them
+    with three vertices inside the side): the STEP round trip writes the 5 built sides and the
+    24 triangles along the side's border, not the 8 that sewing does not touch; the model is
+    the same solid."""
+    import igl_heatseg.cad.build as build_mod
+    from igl_heatseg.cad import roundtrip
+
+    real_surface_for, real_write = build_mod.surface_choice.surface_for, roundtrip.write_step
+
+    def side_0_faceted(a, *args, **kwargs):
+        return (None, None, 1.0, "faceted for the test") if a == 0 else real_surface_for(
+            a, *args, **kwargs)
+
+    written = []
+
+    def counting_write(shape, path, *args, **kwargs):
+        written.append(len(faces_of(shape)))
+        return real_write(shape, path, *args, **kwargs)
+
+    monkeypatch.setattr(build_mod.surface_choice, "surface_for", side_0_faceted)
+    monkeypatch.setattr(roundtrip, "write_step", counting_write)
+    V, F, labels = box_mesh(4)
+    inner = build_mod._inner_vertices(F, labels)
+    assert inner.sum() == 6 * 9  # the 3 x 3 vertices inside each side
+    top = inner & (np.abs(V[:, 2] - 1) < 1e-9)
+    V[top, 2] += np.random.default_rng(0).uniform(0.005, 0.02, top.sum())  # not coplanar
+    res = build_brep(V, F, labels, box_planes())
+    assert written == [5 + 24]
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+    assert res.fidelity["faces"] == 5 + 32
+
+
+def test_inner_vertices_stop_at_the_border_of_an_open_mesh():
+    """A vertex on the mesh's border is not inner, whatever its segment."""
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(4)
+    keep = labels != 1  # the cube without its bottom side: an open box
+    F, labels = F[keep], labels[keep]
+    inner = build_mod._inner_vertices(F, labels)
+    used = np.zeros(len(V), bool)
+    used[F.ravel()] = True
+    assert inner.sum() == 5 * 9
+    assert not inner[~used].any() and not inner[np.abs(V[:, 2] + 1) < 1e-9].any()
 
 
 def test_a_model_left_open_by_the_narrow_blame_is_built_again_with_the_broad_one(monkeypatch):

@@ -30,7 +30,7 @@ from ._ocp import require_ocp
 
 require_ocp()
 
-from OCP.BRep import BRep_Builder  # noqa: E402
+from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace  # noqa: E402
 from OCP.BRepCheck import BRepCheck_Analyzer  # noqa: E402
 from OCP.BRepTools import BRepTools  # noqa: E402
@@ -616,7 +616,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             t = time.perf_counter()
             bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
-                                    ctx["touching"], ctx["narrowed"])
+                                    ctx["touching"], ctx["narrowed"], ctx["exempt"])
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours, ctx["touching"],
@@ -671,17 +671,33 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
+def _inner_vertices(F, labels) -> np.ndarray:
+    """(n,) bool: vertices whose faces are all of one segment, off the mesh's border (a
+    faceted triangle of three such vertices has no edge or vertex that sewing touches)."""
+    n = int(F.max()) + 1
+    lo = np.full(n, np.iinfo(np.int64).max)
+    hi = np.full(n, -1)
+    np.minimum.at(lo, F.ravel(), np.repeat(labels, 3))
+    np.maximum.at(hi, F.ravel(), np.repeat(labels, 3))
+    inner = lo == hi
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    edges, counts = np.unique(E, axis=0, return_counts=True)
+    inner[edges[counts != 2].ravel()] = False
+    return inner
+
+
 def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
-                      narrowed=None):
+                      narrowed=None, exempt=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
-    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known): a built segment's own
+    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known; ``exempt``: surfaces
+    of faceted triangles left out of its STEP round trip): a built segment's own
     face, or, for an invalid triangle of a faceted segment, the built segments whose faces it
     touches in ``shape`` when ``narrow`` (else, or when it touches none, those next to its
     segment, ``neighbours``: segment -> set of adjacent segments; ``narrowed`` gets the
     faceted segments whose blame touching narrowed). [] when
     the shape is valid; None when a face is to blame that no built segment accounts for (a
     unified face, an isolated faceted patch, the shell itself)."""
-    bad_faces = _invalid_faces(shape, valid)
+    bad_faces = _invalid_faces(shape, valid, exempt)
     if not bad_faces:
         return bad_faces
     owners = _surface_owners(faces, owner)
@@ -763,6 +779,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
     faces, status, owner = [], [], []
+    ctx["exempt"] = set()  # surfaces of faceted triangles left out of the STEP round trip
+    inner = None
     areas = segment_areas(V, F, labels, k)
     for a in range(k):
         progress("faces", a / k)
@@ -773,7 +791,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             owner.append(a)
         else:
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
-            tri = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"])
+            tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
+                                               return_index=True)
+            inner = _inner_vertices(F, labels) if inner is None else inner
+            ctx["exempt"].update(BRep_Tool.Surface_s(tri[i]) for i in np.flatnonzero(
+                inner[F[seg_faces[a][rows]]].all(axis=1)))
             faces.extend(tri)
             owner.extend([a] * len(tri))
         status.append(dict(index=a, kind=ctx["fitted"][a].kind,

@@ -18,14 +18,14 @@ from ._ocp import require_ocp
 require_ocp()
 
 from OCP.Bnd import Bnd_Box  # noqa: E402
-from OCP.BRep import BRep_Tool  # noqa: E402
+from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.TopoDS import TopoDS  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
 from .fidelity import face_area, faces_of, shape_analysis  # noqa: E402
-from .step import read_step, write_step  # noqa: E402
+from .step import read_step, step_uncertainty, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
 
@@ -39,7 +39,7 @@ STRAY_BOX_REL = 0.05
 STRAY_AREA_FACTOR = 10.0
 
 
-def invalid_faces(shape, valid: bool | None = None) -> list | None:
+def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     """The faces of ``shape`` that fail BRepCheck in memory or, when it passes there, once
     written to STEP and read back (what a reader of ``model.step`` gets).
 
@@ -50,6 +50,11 @@ def invalid_faces(shape, valid: bool | None = None) -> list | None:
     valid : bool, optional
         The shape's BRepCheck verdict when it is known already: True skips the in-memory
         check (False still needs it, to name the invalid faces).
+    exempt : collection of Geom_Surface, optional
+        Faces on these surfaces are checked in memory but left out of the STEP round trip:
+        the inner triangles of faceted patches, whose edges and vertices sewing does not
+        touch. The faces kept are written with the uncertainty the whole shape would have
+        (:func:`~igl_heatseg.cad.step.step_uncertainty`), which the reader works to.
 
     Returns
     -------
@@ -70,9 +75,15 @@ def invalid_faces(shape, valid: bool | None = None) -> list | None:
         if not checked.IsValid():
             return [f for f in faces_of(shape) if not checked.IsValid(f)] or None
     box = _box(shape)
-    with tempfile.TemporaryDirectory() as tmp:
-        back = read_step(write_step(shape, Path(tmp) / "check.step"))
     mine = faces_of(shape)
+    if exempt:
+        mine = [f for f in mine if BRep_Tool.Surface_s(f) not in exempt]
+        if not mine:
+            return []
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "check.step"  # (a part of the shape, written as the whole would be)
+        back = read_step(write_step(shape, path) if not exempt else write_step(
+            _shell_of(mine), path, precision=step_uncertainty(shape)))
     checked = shape_analysis(back)
     if checked.IsValid():
         return _stray_faces(mine, back, box)
@@ -85,6 +96,16 @@ def invalid_faces(shape, valid: bool | None = None) -> list | None:
     named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,
                                                                           strict=True)]
     return _dedupe([mine[i] for i in named if i is not None]) or None
+
+
+def _shell_of(faces: list):
+    """An open shell of faces (sharing the edges they share)."""
+    shell = TopoDS_Shell()
+    builder = BRep_Builder()
+    builder.MakeShell(shell)
+    for f in faces:
+        builder.Add(shell, f)
+    return shell
 
 
 def _dedupe(faces: list) -> list:

@@ -867,6 +867,31 @@ def test_inner_triangles_of_a_faceted_patch_are_left_out_of_the_step_round_trip(
     assert res.fidelity["faces"] == 5 + 32
 
 
+def test_round_trip_leaves_out_only_exempt_faces_the_shape_holds_unchanged(monkeypatch):
+    """``invalid_faces(exempt=...)`` writes the faces not exempt; a face on an exempt surface
+    that is not the exempt face itself (rebuilt by sewing, fixing or unifying) is written."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+
+    from igl_heatseg.cad import roundtrip
+
+    real_write, written = roundtrip.write_step, []
+
+    def counting_write(shape, path, *args, **kwargs):
+        written.append(len(faces_of(shape)))
+        return real_write(shape, path, *args, **kwargs)
+
+    V, F, labels = box_mesh(2)
+    shape = build_brep(V, F, labels, box_planes()).shape
+    monkeypatch.setattr(roundtrip, "write_step", counting_write)
+    faces = faces_of(shape)
+    exempt = {BRep_Tool.Surface_s(f): f for f in faces[:2]}
+    assert roundtrip.invalid_faces(shape, exempt=exempt) == [] and written == [4]
+    exempt[BRep_Tool.Surface_s(faces[0])] = BRepBuilderAPI_Copy(faces[0]).Shape()
+    assert roundtrip.invalid_faces(shape, exempt=exempt) == [] and written == [4, 5]
+    assert roundtrip.invalid_faces(shape, exempt={}) == [] and written == [4, 5, 6]
+
+
 def test_inner_vertices_stop_at_the_border_of_an_open_mesh():
     """A vertex on the mesh's border is not inner, whatever its segment."""
     import igl_heatseg.cad.build as build_mod

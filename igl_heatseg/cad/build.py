@@ -689,8 +689,8 @@ def _inner_vertices(F, labels) -> np.ndarray:
 def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
                       narrowed=None, exempt=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
-    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known; ``exempt``: surfaces
-    of faceted triangles left out of its STEP round trip): a built segment's own
+    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known; ``exempt``: faceted
+    triangles by surface, left out of its STEP round trip): a built segment's own
     face, or, for an invalid triangle of a faceted segment, the built segments whose faces it
     touches in ``shape`` when ``narrow`` (else, or when it touches none, those next to its
     segment, ``neighbours``: segment -> set of adjacent segments; ``narrowed`` gets the
@@ -779,7 +779,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     ctx["sew_tol"] = max(ctx["sew_tol"], FACET_GAP_FACTOR * ctx.get("facet_gap", 0.0))
     t = time.perf_counter()
     faces, status, owner = [], [], []
-    ctx["exempt"] = set()  # surfaces of faceted triangles left out of the STEP round trip
+    ctx["exempt"] = {}  # faceted triangles left out of the STEP round trip, by surface
     inner = None
     areas = segment_areas(V, F, labels, k)
     for a in range(k):
@@ -794,7 +794,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
                                                return_index=True)
             inner = _inner_vertices(F, labels) if inner is None else inner
-            ctx["exempt"].update(BRep_Tool.Surface_s(tri[i]) for i in np.flatnonzero(
+            ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
                 inner[F[seg_faces[a][rows]]].all(axis=1)))
             faces.extend(tri)
             owner.extend([a] * len(tri))

@@ -29,6 +29,8 @@ from .step import read_step, step_uncertainty, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
 
+_NONE = TopoDS_Shell()  # a null shape: the same as no face
+
 #: A face read back from STEP reaching this fraction of the model's diagonal out of its box, or
 #: with more than STRAY_AREA_FACTOR times its area, is wrong (sewing tolerances are at most
 #: half a mesh edge).  Measured on tuning parts: a sewn triangle came back 118 times larger
@@ -50,11 +52,13 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     valid : bool, optional
         The shape's BRepCheck verdict when it is known already: True skips the in-memory
         check (False still needs it, to name the invalid faces).
-    exempt : collection of Geom_Surface, optional
-        Faces on these surfaces are checked in memory but left out of the STEP round trip:
-        the inner triangles of faceted patches, whose edges and vertices sewing does not
-        touch. The faces kept are written with the uncertainty the whole shape would have
-        (:func:`~igl_heatseg.cad.step.step_uncertainty`), which the reader works to.
+    exempt : dict of Geom_Surface -> TopoDS_Face, optional
+        Faces checked in memory but left out of the STEP round trip when ``shape`` holds them
+        unchanged (the same face on the same surface: not rebuilt by sewing, fixing or
+        unifying): the inner triangles of faceted patches, whose edges and vertices sewing
+        does not touch. The faces kept are written with the uncertainty the whole shape
+        would have (:func:`~igl_heatseg.cad.step.step_uncertainty`), which the reader works
+        to.
 
     Returns
     -------
@@ -77,7 +81,7 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     box = _box(shape)
     mine = faces_of(shape)
     if exempt:
-        mine = [f for f in mine if BRep_Tool.Surface_s(f) not in exempt]
+        mine = [f for f in mine if not f.IsSame(exempt.get(BRep_Tool.Surface_s(f), _NONE))]
         if not mine:
             return []
     with tempfile.TemporaryDirectory() as tmp:

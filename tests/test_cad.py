@@ -909,8 +909,8 @@ def test_inner_vertices_stop_at_the_border_of_an_open_mesh():
 def test_a_solid_with_an_invalid_face_is_not_handed_to_shapefix_solid(monkeypatch):
     """A closed shell with a face 4 units off its edges makes an invalid solid; ShapeFix_Solid
     is not run on it (here it would make it "valid" by widening the edges' tolerance to 4; on
-    the 72 tuning parts it ran 6 times on such solids, up to 28 s, and made none valid): the
-    caller facets the face's segment instead. A valid box's solid is made as before."""
+    the tuning parts it took up to 28 s on such solids and made none valid): the caller facets
+    the face's segment instead. A valid box's solid is made as before."""
     from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox

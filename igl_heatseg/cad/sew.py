@@ -87,8 +87,8 @@ def _solid(shell):
     if not valid and all(checked.IsValid(f) for f in faces_of(solid)):
         # ShapeFix_Solid only when needed: 3 s on a 15k-face shell, and it has made an
         # invalid solid of a valid one (a 17k-face shell). Not when a face fails BRepCheck
-        # (the caller facets its segment and builds again): on the 72 tuning parts it ran 6
-        # times on such solids, 33 s once, and made none valid (benchmarks/cad_results.md)
+        # (the caller facets its segment and builds again): it took up to 33 s on such
+        # solids and made none of them valid (benchmarks/cad_results.md)
         fix = ShapeFix_Solid(solid)
         fix.Perform()
         solid = fix.Solid()

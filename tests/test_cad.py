@@ -906,42 +906,6 @@ def test_inner_vertices_stop_at_the_border_of_an_open_mesh():
     assert not inner[~used].any() and not inner[np.abs(V[:, 2] + 1) < 1e-9].any()
 
 
-def test_a_solid_with_an_invalid_face_is_not_handed_to_shapefix_solid(monkeypatch):
-    """A closed shell with a face 4 units off its edges makes an invalid solid; ShapeFix_Solid
-    is not run on it (here it would make it "valid" by widening the edges' tolerance to 4; on
-    the tuning parts it took up to 28 s on such solids and made none valid): the caller facets
-    the face's segment instead. A valid box's solid is made as before."""
-    from OCP.BRep import BRep_Builder
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
-    from OCP.BRepTools import BRepTools
-    from OCP.Geom import Geom_Plane
-    from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
-    from OCP.TopoDS import TopoDS_Shell
-
-    from igl_heatseg.cad import sew as sew_mod
-
-    calls = []
-    real_fix = sew_mod.ShapeFix_Solid
-    monkeypatch.setattr(sew_mod, "ShapeFix_Solid", lambda s: calls.append(1) or real_fix(s))
-
-    def shell_of(faces):
-        shell, builder = TopoDS_Shell(), BRep_Builder()
-        builder.MakeShell(shell)
-        for f in faces:
-            builder.Add(shell, f)
-        shell.Closed(True)
-        return shell
-
-    faces = faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())
-    solid, valid = sew_mod._solid(shell_of(faces))
-    assert valid and calls == []
-    plane = Geom_Plane(gp_Pln(gp_Pnt(0, 0, 5), gp_Dir(0, 0, 1)))
-    faces[5] = BRepBuilderAPI_MakeFace(plane, BRepTools.OuterWire_s(faces[5]), True).Face()
-    solid, valid = sew_mod._solid(shell_of(faces))
-    assert solid is not None and not valid and calls == []
-
-
 def test_a_model_left_open_by_the_narrow_blame_is_built_again_with_the_broad_one(monkeypatch):
     """When blaming faceted triangles on the built faces they touch leaves a closed mesh
     without a solid, the model is built again blaming every built segment next to them."""

@@ -19,7 +19,7 @@ from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
 
-from .fidelity import count_free_edges, faces_of, shape_analysis, shape_valid  # noqa: E402
+from .fidelity import count_free_edges, faces_of, shape_valid  # noqa: E402
 from .pcurves import mend_pcurves  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -82,13 +82,10 @@ def _solid(shell):
     if not mk.IsDone():
         return None, False
     solid = mk.Solid()
-    checked = shape_analysis(solid)
-    valid = bool(checked.IsValid())
-    if not valid and all(checked.IsValid(f) for f in faces_of(solid)):
+    valid = shape_valid(solid)
+    if not valid:
         # ShapeFix_Solid only when needed: 3 s on a 15k-face shell, and it has made an
-        # invalid solid of a valid one (a 17k-face shell). Not when a face fails BRepCheck
-        # (the caller facets its segment and builds again): it took up to 33 s on such
-        # solids and made none of them valid (benchmarks/cad_results.md)
+        # invalid solid of a valid one (a 17k-face shell)
         fix = ShapeFix_Solid(solid)
         fix.Perform()
         solid = fix.Solid()

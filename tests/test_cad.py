@@ -856,8 +856,10 @@ def test_inner_triangles_of_a_faceted_patch_are_left_out_of_the_step_round_trip(
 
     monkeypatch.setattr(build_mod.surface_choice, "surface_for", side_0_faceted)
     monkeypatch.setattr(roundtrip, "write_step", counting_write)
+    from igl_heatseg.cad.topology import inner_vertices
+
     V, F, labels = box_mesh(4)
-    inner = build_mod._inner_vertices(F, labels)
+    inner = inner_vertices(F, labels)
     assert inner.sum() == 6 * 9  # the 3 x 3 vertices inside each side
     top = inner & (np.abs(V[:, 2] - 1) < 1e-9)
     V[top, 2] += np.random.default_rng(0).uniform(0.005, 0.02, top.sum())  # not coplanar
@@ -894,12 +896,12 @@ def test_round_trip_leaves_out_only_exempt_faces_the_shape_holds_unchanged(monke
 
 def test_inner_vertices_stop_at_the_border_of_an_open_mesh():
     """A vertex on the mesh's border is not inner, whatever its segment."""
-    import igl_heatseg.cad.build as build_mod
+    from igl_heatseg.cad.topology import inner_vertices
 
     V, F, labels = box_mesh(4)
     keep = labels != 1  # the cube without its bottom side: an open box
     F, labels = F[keep], labels[keep]
-    inner = build_mod._inner_vertices(F, labels)
+    inner = inner_vertices(F, labels)
     used = np.zeros(len(V), bool)
     used[F.ravel()] = True
     assert inner.sum() == 5 * 9

@@ -48,7 +48,12 @@ from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
-from .topology import boundary_graph, segment_areas, segment_neighbours  # noqa: E402
+from .topology import (  # noqa: E402
+    boundary_graph,
+    inner_vertices,
+    segment_areas,
+    segment_neighbours,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -671,21 +676,6 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
-def _inner_vertices(F, labels) -> np.ndarray:
-    """(n,) bool: vertices whose faces are all of one segment, off the mesh's border (a
-    faceted triangle of three such vertices has no edge or vertex that sewing touches)."""
-    n = int(F.max()) + 1
-    lo = np.full(n, np.iinfo(np.int64).max)
-    hi = np.full(n, -1)
-    np.minimum.at(lo, F.ravel(), np.repeat(labels, 3))
-    np.maximum.at(hi, F.ravel(), np.repeat(labels, 3))
-    inner = lo == hi
-    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
-    edges, counts = np.unique(E, axis=0, return_counts=True)
-    inner[edges[counts != 2].ravel()] = False
-    return inner
-
-
 def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
                       narrowed=None, exempt=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
@@ -793,7 +783,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
             tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
                                                return_index=True)
-            inner = _inner_vertices(F, labels) if inner is None else inner
+            inner = inner_vertices(F, labels) if inner is None else inner
             ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
                 inner[F[seg_faces[a][rows]]].all(axis=1)))
             faces.extend(tri)

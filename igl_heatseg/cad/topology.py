@@ -14,7 +14,7 @@ from igl_heatseg.mesh.topology import KINK_ANGLE, BoundaryGraph, Chain, boundary
 from igl_heatseg.surfaces.samples import segment_adjacency
 
 __all__ = ["Chain", "BoundaryGraph", "boundary_graph", "segment_neighbours", "segment_areas",
-           "KINK_ANGLE"]
+           "inner_vertices", "KINK_ANGLE"]
 
 
 def segment_neighbours(F: np.ndarray, labels: np.ndarray, k: int) -> dict:
@@ -69,3 +69,38 @@ def segment_areas(V: np.ndarray, F: np.ndarray, labels: np.ndarray, k: int) -> n
     [1.0, 0.0]
     """
     return np.bincount(labels, weights=face_areas(V, F), minlength=k)
+
+
+def inner_vertices(F: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Vertices inside their segment: all their faces have one label and none of their edges
+    is on the mesh's border (a faceted triangle of three such vertices has no edge or vertex
+    that sewing touches).
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    labels : (m,) int64
+
+    Returns
+    -------
+    (F.max() + 1,) bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]])   # a fan around vertex 0
+    >>> inner_vertices(F, np.zeros(4, np.int64)).tolist()           # 1..4 are on the border
+    [True, False, False, False, False]
+    >>> inner_vertices(F, np.array([0, 0, 1, 1])).tolist()          # 0 is on two segments
+    [False, False, False, False, False]
+    """
+    n = int(F.max()) + 1
+    lo = np.full(n, np.iinfo(np.int64).max)
+    hi = np.full(n, -1)
+    np.minimum.at(lo, F.ravel(), np.repeat(labels, 3))
+    np.maximum.at(hi, F.ravel(), np.repeat(labels, 3))
+    inner = lo == hi
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    edges, counts = np.unique(E, axis=0, return_counts=True)
+    inner[edges[counts != 2].ravel()] = False
+    return inner

@@ -14,7 +14,7 @@ from ._ocp import require_ocp
 require_ocp()
 
 from OCP.Bnd import Bnd_Box  # noqa: E402
-from OCP.BRep import BRep_Tool  # noqa: E402
+from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex  # noqa: E402
@@ -40,13 +40,13 @@ from OCP.TopAbs import (  # noqa: E402
 )
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopLoc import TopLoc_Location  # noqa: E402
-from OCP.TopoDS import TopoDS  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
            "tessellate", "tessellate_by_type", "face_type", "mesh_volume", "shape_analysis",
-           "shape_valid"]
+           "shape_valid", "shell_of"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -108,6 +108,32 @@ def faces_of(shape) -> list:
         out.append(TopoDS.Face(ex.Current()))
         ex.Next()
     return out
+
+
+def shell_of(faces: list):
+    """A shell of faces, sharing the edges they share (no sewing; not marked closed).
+
+    Parameters
+    ----------
+    faces : list of TopoDS_Face
+
+    Returns
+    -------
+    TopoDS_Shell
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> shell = shell_of(faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[:5])
+    >>> len(faces_of(shell)), count_free_edges(shell)
+    (5, 4)
+    """
+    shell = TopoDS_Shell()
+    builder = BRep_Builder()
+    builder.MakeShell(shell)
+    for f in faces:
+        builder.Add(shell, f)
+    return shell
 
 
 def _count(shape, kind) -> int:

@@ -18,13 +18,13 @@ from ._ocp import require_ocp
 require_ocp()
 
 from OCP.Bnd import Bnd_Box  # noqa: E402
-from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
+from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
 from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
-from .fidelity import face_area, faces_of, shape_analysis  # noqa: E402
+from .fidelity import face_area, faces_of, shape_analysis, shell_of  # noqa: E402
 from .step import read_step, step_uncertainty, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -87,7 +87,7 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "check.step"  # (a part of the shape, written as the whole would be)
         back = read_step(write_step(shape, path) if not exempt else write_step(
-            _shell_of(mine), path, precision=step_uncertainty(shape)))
+            shell_of(mine), path, precision=step_uncertainty(shape)))
     checked = shape_analysis(back)
     if checked.IsValid():
         return _stray_faces(mine, back, box)
@@ -100,16 +100,6 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,
                                                                           strict=True)]
     return _dedupe([mine[i] for i in named if i is not None]) or None
-
-
-def _shell_of(faces: list):
-    """An open shell of faces (sharing the edges they share)."""
-    shell = TopoDS_Shell()
-    builder = BRep_Builder()
-    builder.MakeShell(shell)
-    for f in faces:
-        builder.Add(shell, f)
-    return shell
 
 
 def _dedupe(faces: list) -> list:

@@ -17,9 +17,9 @@ from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
 from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
 from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shell  # noqa: E402
+from OCP.TopoDS import TopoDS, TopoDS_Compound  # noqa: E402
 
-from .fidelity import count_free_edges, faces_of, shape_valid  # noqa: E402
+from .fidelity import count_free_edges, faces_of, shape_valid, shell_of  # noqa: E402
 from .pcurves import mend_pcurves  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -40,11 +40,7 @@ def _shells(shape) -> list:
 
 
 def _shell_of(faces):
-    shell = TopoDS_Shell()
-    builder = BRep_Builder()
-    builder.MakeShell(shell)
-    for f in faces:
-        builder.Add(shell, f)
+    shell = shell_of(faces)
     shell.Closed(count_free_edges(shell) == 0)
     return shell
 

@@ -770,7 +770,6 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     t = time.perf_counter()
     faces, status, owner = [], [], []
     ctx["exempt"] = {}  # faceted triangles left out of the STEP round trip, by surface
-    inner = None
     areas = segment_areas(V, F, labels, k)
     for a in range(k):
         progress("faces", a / k)
@@ -783,7 +782,9 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
             tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
                                                return_index=True)
-            inner = inner_vertices(F, labels) if inner is None else inner
+            if "inner" not in ctx:  # (the same for every build of the model)
+                ctx["inner"] = inner_vertices(F, labels)
+            inner = ctx["inner"]
             ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
                 inner[F[seg_faces[a][rows]]].all(axis=1)))
             faces.extend(tri)

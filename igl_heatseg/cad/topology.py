@@ -7,6 +7,7 @@ traces trimming curves along them too); they are re-exported here for the CAD st
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 
 from igl_heatseg.mesh.geometry import face_areas
@@ -99,8 +100,4 @@ def inner_vertices(F: np.ndarray, labels: np.ndarray) -> np.ndarray:
     hi = np.full(n, -1)
     np.minimum.at(lo, F.ravel(), np.repeat(labels, 3))
     np.maximum.at(hi, F.ravel(), np.repeat(labels, 3))
-    inner = lo == hi
-    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
-    edges, counts = np.unique(E, axis=0, return_counts=True)
-    inner[edges[counts != 2].ravel()] = False
-    return inner
+    return (lo == hi) & ~np.asarray(igl.is_border_vertex(F), dtype=bool)

@@ -1,8 +1,8 @@
 """From a segmented mesh with one fitted surface per segment to a sewn B-Rep.
 
-Stages (timed in :attr:`CadResult.timings`): ``topology`` (chains, loops, corners from the
-labels), ``surfaces`` (OCC surfaces; freeform B-splines over charts; deviation check, a
-B-spline over the chart of an analytic segment that deviates),
+Stages (timed in :attr:`~igl_heatseg.cad.result.CadResult.timings`): ``topology`` (chains,
+loops, corners from the labels), ``surfaces`` (OCC surfaces; freeform B-splines over
+charts; deviation check, a B-spline over the chart of an analytic segment that deviates),
 ``vertices`` and ``edges`` (Gauss-Newton onto the adjacent surfaces, exact lines and circles
 or B-spline curves -- the chain's polyline where a spline would ring off it -- each edge
 built once and shared by its two faces; two corners of one chain never share a point),
@@ -17,7 +17,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
 
 import igl
 import numpy as np
@@ -45,6 +44,7 @@ from .blame import surface_owners as _surface_owners  # noqa: E402
 from .blame import touching_segments as _touching_segments  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
+from .result import CadResult  # noqa: E402
 from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
@@ -116,58 +116,6 @@ MAX_REBUILDS = 2
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
 MIN_TOL_REL = 1e-7
-
-
-@dataclass
-class CadResult:
-    """Result of :func:`build_brep`.
-
-    Attributes
-    ----------
-    shape : TopoDS_Shape
-        A solid when the mesh was closed and the shell closed, else a shell or compound.
-    faces : list of dict
-        One per segment: ``index``, ``kind``, ``status`` (``"built"`` or ``"faceted"``),
-        ``reason`` (None when built), ``built_as`` (the fitted ``kind``, or ``"bspline"`` for
-        an analytic segment farther than the tolerance from its surface, or misfit by it, that
-        a B-spline over its chart fits better; None when faceted), ``max_dev`` (largest vertex
-        distance to the surface built, else to the fitted one), ``why_bspline`` (for those
-        B-spline faces, which test sent them there and both fits' deviations; else None).
-    fidelity : dict
-        :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
-    timings : dict
-        Seconds per stage.
-    tolerances : dict
-        The modelling, curve and sewing tolerances used.
-    faceted_model : bool
-        True when the whole build failed and ``shape`` is the fully faceted mesh (of a mesh of
-        several parts: every part faceted).
-    """
-
-    shape: object
-    faces: list = field(default_factory=list)
-    fidelity: dict = field(default_factory=dict)
-    timings: dict = field(default_factory=dict)
-    tolerances: dict = field(default_factory=dict)
-    faceted_model: bool = False
-    message: str = ""
-
-    @property
-    def not_built(self) -> list:
-        """Entries of :attr:`faces` that were faceted."""
-        return [f for f in self.faces if f["status"] != "built"]
-
-    def to_report(self) -> dict:
-        """JSON-ready summary (no OCC objects)."""
-        return {
-            "faces": [dict(f) for f in self.faces],
-            "not_built": [f["index"] for f in self.not_built],
-            "fidelity": dict(self.fidelity),
-            "timings": {k: round(float(v), 4) for k, v in self.timings.items()},
-            "tolerances": dict(self.tolerances),
-            "faceted_model": bool(self.faceted_model),
-            "message": self.message,
-        }
 
 
 def _vertex(builder, X, tol):

@@ -699,6 +699,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     pos = _place_vertices(V, graph, projs, ctx)
     ctx["pos"], ctx["chains"] = pos, graph.chains
     vertices = {v: _vertex(ctx["builder"], X, ctx["vertex_tol"]) for v, X in pos.items()}
+    ctx["vtols"] = {}  # new vertices: the tolerances an earlier build raised are not theirs
     snap = V.copy()
     for v, X in pos.items():
         snap[v] = X

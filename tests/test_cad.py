@@ -580,15 +580,18 @@ def test_part_by_part_renumbers_charts_and_drops_spread_ones():
     def build(Vp, Fp, labels, surfaces, uv=None, tol=None):
         seen.append([None if c is None else (c[0].tolist(), float(c[1][0, 0])) for c in uv])
         faces = [dict(index=i, kind="plane", status="built") for i in range(len(surfaces))]
+        moved = np.array([[1, 1, 0]]) if len(seen) == 2 else np.zeros((0, 3), np.int64)
         return SimpleNamespace(shape=BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape(), faces=faces,
-                               faceted_model=False)
+                               faceted_model=False, border_faces_moved=moved)
 
     planes = box_planes()[:3]
-    shape, faces, fid, whole, message = build_by_component(V, F, np.array([0, 1, 1, 2]),
-                                                           planes, uv, 0.1, build)
+    shape, faces, fid, whole, message, moved = build_by_component(V, F, np.array([0, 1, 1, 2]),
+                                                                  planes, uv, 0.1, build)
     # each part's vertices renumbered 0..3; the spread segment's chart left to the part builds
     assert seen == [[([0, 1, 2], 0.0), None], [None, ([1, 2, 3], 2.0)]]
     assert [f["index"] for f in faces] == [0, 1, 2] and not whole and fid["solids"] == 2
+    # a face the second part moved, in the whole mesh's faces and segments
+    assert moved.tolist() == [[3, 2, 1]]
 
 
 def test_disk_chart_refuses_two_fans_sharing_a_vertex():
@@ -1255,3 +1258,95 @@ def test_faceted_patch_skips_a_triangle_with_a_side_within_the_tolerance():
     F = np.array([[0, 1, 2], [0, 2, 3], [2, 4, 3]])
     faces = triangle_faces(V, F, 1e-6)  # raised StdFail_NotDone before
     assert len(faces) == 2
+
+
+def _box_with_a_side_triangle_on_top(n: int = 4):
+    """A box whose +z side (segment 0) holds one triangle of the +x side (segment 2) along
+    their common edge: +z's plane misses that triangle's far vertex by a grid step."""
+    V, F, labels = box_mesh(n)
+    centroid = V[F].mean(axis=1)
+    f = int(np.flatnonzero((labels == 2) & (centroid[:, 2] > 1 - 1.0 / n))[0])
+    given = labels.copy()
+    given[f] = 0
+    return V, F, labels, given, f
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_settle_borders_gives_strayed_border_triangles_back_to_their_side(seed):
+    from igl_heatseg.cad.segments import settle_borders
+
+    V, F, labels, _, _ = box_mesh(6) + (None, None)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    rng = np.random.default_rng(seed)
+    border = np.flatnonzero((labels[np.maximum(TT, 0)] != labels[:, None]).any(axis=1))
+    strays = rng.choice(border, size=6, replace=False)
+    given = labels.copy()
+    for f in strays:  # to a neighbouring side across one of its border edges
+        given[f] = labels[TT[f][labels[TT[f]] != labels[f]][0]]
+    assert (given != labels).sum() == 6
+    settled, moved = settle_borders(V, F, given, box_planes(), 1e-6)
+    assert np.array_equal(settled, labels)
+    assert sorted(moved[:, 0].tolist()) == sorted(strays.tolist())
+    assert np.array_equal(moved[:, 1], given[moved[:, 0]])
+    assert np.array_equal(moved[:, 2], labels[moved[:, 0]])
+
+
+def test_settle_borders_moves_nothing_of_a_segment_it_cannot_mend():
+    from igl_heatseg.cad.segments import settle_borders
+
+    V, F, labels, given, f = _box_with_a_side_triangle_on_top()
+    surfs = box_planes()
+    # no neighbour within the tolerance (the +x side's plane moved away), or none allowed
+    far = list(surfs)
+    far[2] = Surface("plane", {"point": np.array([3.0, 0, 0]), "normal": np.array([1.0, 0, 0])})
+    for args in ((far,), (surfs, None, {1, 3, 4, 5})):
+        same, moved = settle_borders(V, F, given, args[0], 1e-6, *args[1:])
+        assert np.array_equal(same, given) and moved.shape == (0, 3)
+    # a giver not allowed to give, or the stray triangle its whole segment
+    same, moved = settle_borders(V, F, given, surfs, 1e-6, movable={1, 2})
+    assert np.array_equal(same, given)
+    alone = labels.copy()
+    alone[f] = 6
+    same, moved = settle_borders(V, F, alone, surfs + [surfs[0]], 1e-6)
+    assert np.array_equal(same, alone)
+
+
+def test_border_triangle_on_the_neighbour_is_built_with_it():
+    import igl_heatseg.cad.surface_choice as choice_mod
+
+    V, F, labels, given, f = _box_with_a_side_triangle_on_top()
+    res = build_brep(V, F, given, box_planes(), tol=0.01)
+    assert res.border_faces_moved.tolist() == [[f, 0, 2]]
+    assert res.to_report()["border_faces_moved"] == [[f, 0, 2]]
+    assert not res.not_built and res.fidelity["valid"] and res.fidelity["solids"] == 1
+    assert abs(res.fidelity["volume"] - 8.0) < 1e-6
+    # without the move, the +z side is faceted for that triangle (and +x with it)
+    orig = choice_mod.settle_borders
+    try:
+        choice_mod.settle_borders = lambda V, F, labels, *a, **k: (labels, np.zeros((0, 3),
+                                                                                    np.int64))
+        res = build_brep(V, F, given, box_planes(), tol=0.01)
+    finally:
+        choice_mod.settle_borders = orig
+    assert res.faces[0]["reason"].startswith("surface deviates")
+    assert res.border_faces_moved.shape == (0, 3)
+
+
+def test_model_broken_by_moved_border_faces_is_built_again_with_the_given_borders(monkeypatch):
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels, given, f = _box_with_a_side_triangle_on_top()
+    real, seen = build_mod._sewn_model, []
+
+    def settled_model_fails(V, F, labels, *args):  # as if the build faceted it whole
+        shape, status, sew_tol, whole, message, solid = real(V, F, labels, *args)
+        seen.append(int(labels[f]))
+        return (shape, status, sew_tol, True, "failed", False) if labels[f] == 2 else (
+            shape, status, sew_tol, whole, message, solid)
+
+    monkeypatch.setattr(build_mod, "_sewn_model", settled_model_fails)
+    res = build_brep(V, F, given, box_planes(), tol=0.01)
+    assert seen == [2, 0]
+    assert not res.faceted_model and res.fidelity["valid"] and res.fidelity["solids"] == 1
+    assert res.border_faces_moved.shape == (0, 3)
+    assert res.faces[0]["reason"].startswith("surface deviates")

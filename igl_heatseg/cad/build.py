@@ -512,8 +512,23 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["bspline"], ctx["fallbacks"] = True, set()
     ctx["wide_area"], ctx["widened"] = True, set()
     ctx["touching"], ctx["narrowed"] = True, set()
+    cache = ctx["surface_cache"] = {}  # (segment, B-splines allowed) -> its surface_for
+    given, moved, touched = surface_choice.settle(V, F, labels, surfaces, uv, ctx["tol"],
+                                                  ctx["misfit_rms"], cache, ctx["notes"])
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
-        V, F, labels, surfaces, uv, ctx, closed, timings, progress)
+        V, F, given, surfaces, uv, ctx, closed, timings, progress)
+    if touched and (faceted_model or (closed and not solid)):
+        logger.warning("the model with border faces of segments %s moved is %s; building it "
+                       "again with the segmentation's borders", sorted(touched),
+                       "faceted" if faceted_model else "not a solid")
+        _forget(ctx, touched)
+        again = _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress)
+        if (not again[3], again[5]) > (not faceted_model, solid):
+            shape, status, sew_tol, faceted_model, message, solid = again
+            given, moved = labels, moved[:0]
+        else:
+            _forget(ctx, touched)
+    labels = given
     # (built, allowed, what, how instead, also when fully faceted): the faces that may be what
     # broke the model; it is built again without them, and kept if better (a rebuild keeps the
     # earlier ones' choices). A fully faceted model is not built again for the narrow faces:
@@ -548,14 +563,23 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     timings["fidelity"] = time.perf_counter() - t
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
-    return CadResult(shape, status, fid, timings, tols, faceted_model, message)
+    return CadResult(shape, status, fid, timings, tols, faceted_model, message, moved)
+
+
+def _forget(ctx, segments) -> None:
+    """Drop what a build kept of the segments' faces (their surfaces, the inner vertices), for
+    a build with other labels."""
+    for a in segments:
+        ctx["surface_cache"].pop((a, True), None)
+        ctx["surface_cache"].pop((a, False), None)
+    ctx.pop("inner", None)
 
 
 def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     """Faces built, sewn and checked, with the rebuilds of :func:`build_brep`: (shape, status,
     sewing tolerance, fully faceted?, message, solid?)."""
     skip: dict = {}  # segments faceted after sewing: failed BRepCheck, or along free edges
-    cache = ctx.setdefault("surface_cache", {})  # shared by the builds with and without B-splines
+    cache = ctx["surface_cache"]  # shared by the builds with and without B-splines
     neighbours = segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it
     try:
@@ -731,7 +755,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
             tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
                                                return_index=True)
-            if "inner" not in ctx:  # (the same for every build of the model)
+            if "inner" not in ctx:  # (the same for every build with these labels: _forget)
                 ctx["inner"] = inner_vertices(F, labels)
             inner = ctx["inner"]
             ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(

@@ -40,7 +40,7 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
         The modelling tolerance of the whole mesh (model units).
     build : callable
         ``build(V, F, labels, surfaces, uv=..., tol=...)`` for one part, returning an object
-        with ``shape``, ``faces`` and ``faceted_model``
+        with ``shape``, ``faces``, ``faceted_model`` and ``border_faces_moved``
         (:func:`~igl_heatseg.cad.build.build_brep`, which calls this module, passes itself).
     progress : callable(stage, fraction), optional
 
@@ -48,9 +48,11 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
     -------
     tuple or None
         None for a mesh of one part. Otherwise ``(shape, faces, fidelity, faceted_model,
-        message)``: the compound; one entry per segment, as ``build`` gives them, faceted when
-        any of its parts was; :func:`~igl_heatseg.cad.fidelity.brep_fidelity` of the compound
-        against the whole mesh; True only when every part was faceted whole; a summary.
+        message, border_faces_moved)``: the compound; one entry per segment, as ``build`` gives
+        them, faceted when any of its parts was; :func:`~igl_heatseg.cad.fidelity.brep_fidelity`
+        of the compound against the whole mesh; True only when every part was faceted whole; a
+        summary; the parts' moved faces ``(p, 3)`` (face, old and new segment, into ``F`` and
+        ``labels``).
 
     Examples
     --------
@@ -60,8 +62,8 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
     >>> F = np.array([[0, 1, 2], [3, 4, 5]])
     >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
     >>> from igl_heatseg.cad.build import build_brep
-    >>> shape, faces, fid, whole, _ = build_by_component(V, F, np.array([0, 0]), [z], None,
-    ...                                                   0.01, build_brep)
+    >>> shape, faces, fid, whole, _, _ = build_by_component(V, F, np.array([0, 0]), [z], None,
+    ...                                                      0.01, build_brep)
     >>> fid["faces"], [f["status"] for f in faces], whole
     (2, ['built'], False)
     """
@@ -73,7 +75,7 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
     builder.MakeCompound(compound)
     faceted: dict = {}
     status = [None] * len(surfaces)
-    whole = 0
+    whole, moved = 0, [np.zeros((0, 3), dtype=np.int64)]
     k = len(surfaces)
     lo, hi = np.full(k, count), np.full(k, -1)
     np.minimum.at(lo, labels, comp)
@@ -88,6 +90,8 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
                     uv=_charts(uv, segs, verts, spread), tol=tol)
         builder.Add(compound, res.shape)
         whole += bool(res.faceted_model)
+        m = np.asarray(res.border_faces_moved, dtype=np.int64).reshape(-1, 3)
+        moved.append(np.c_[faces[m[:, 0]], segs[m[:, 1]], segs[m[:, 2]]])
         for entry, a in zip(res.faces, segs.tolist(), strict=True):
             if status[a] is None or entry["status"] != "built":
                 status[a] = dict(entry, index=a)
@@ -102,7 +106,7 @@ def build_by_component(V, F, labels, surfaces, uv, tol: float, build, progress=N
     fid = brep_fidelity(compound, V, F)
     message = (f"the model as a whole stayed invalid; built part by part: {whole} of {count} "
                f"parts fully faceted, {len(faceted)} of {len(surfaces)} segments faceted")
-    return compound, status, fid, whole == count, message
+    return compound, status, fid, whole == count, message, np.concatenate(moved)
 
 
 def _charts(uv, segs, verts, spread):

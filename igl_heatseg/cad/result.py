@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 __all__ = ["CadResult"]
 
 
@@ -32,6 +34,12 @@ class CadResult:
     faceted_model : bool
         True when the whole build failed and ``shape`` is the fully faceted mesh (of a mesh of
         several parts: every part faceted).
+    message : str
+    border_faces_moved : (p, 3) int64
+        Mesh faces built with a neighbouring segment instead of their own (face, segment of the
+        labels given, segment built with;
+        :func:`~igl_heatseg.cad.surface_choice.settle`); the faces of a segment are those of
+        the labels given with these moves.
     """
 
     shape: object
@@ -41,6 +49,8 @@ class CadResult:
     tolerances: dict = field(default_factory=dict)
     faceted_model: bool = False
     message: str = ""
+    border_faces_moved: np.ndarray = field(
+        default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
 
     @property
     def not_built(self) -> list:
@@ -57,4 +67,5 @@ class CadResult:
             "tolerances": dict(self.tolerances),
             "faceted_model": bool(self.faceted_model),
             "message": self.message,
+            "border_faces_moved": np.asarray(self.border_faces_moved).tolist(),
         }

@@ -1,15 +1,19 @@
 """What :func:`~igl_heatseg.cad.build.build_brep` needs from a segmentation that did not fit
 surfaces (the paper's mode) or that has charts (the pipeline): one surface per segment, fitted
-without relabelling, and the certified chart UVs of the segments.
+without relabelling, and the certified chart UVs of the segments; and the border faces a
+segment's surface misses, given to the neighbour whose surface holds them
+(:func:`settle_borders`).
 
 No OpenCASCADE here: these functions run before the build.
 """
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 
 from igl_heatseg.errors import MeshError
+from igl_heatseg.mesh.topology import label_pieces
 from igl_heatseg.parameterization.split import PACKING_METHODS
 from igl_heatseg.surfaces.model import Surface
 from igl_heatseg.surfaces.segment_fit import MIN_FIT_FACES, vertex_samples
@@ -18,7 +22,7 @@ from igl_heatseg.surfaces.tolerance import vertex_tolerance
 
 from .topology import segment_areas
 
-__all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms", "check_inputs"]
+__all__ = ["fit_segment_surfaces", "chart_uvs", "typical_rms", "check_inputs", "settle_borders"]
 
 
 def fit_segment_surfaces(V: np.ndarray, F: np.ndarray, labels: np.ndarray,
@@ -108,6 +112,114 @@ def typical_rms(V: np.ndarray, F: np.ndarray, labels: np.ndarray, surfaces) -> f
     order = np.argsort(rms)
     c = np.cumsum(w[order])
     return float(rms[order][min(int(np.searchsorted(c, 0.5 * c[-1])), len(c) - 1)])
+
+
+def settle_borders(V: np.ndarray, F: np.ndarray, labels: np.ndarray, surfaces, tol: float,
+                   movable=None, receivers=None) -> tuple[np.ndarray, np.ndarray]:
+    """Border faces that a segment's surface misses, given to the neighbour whose surface
+    holds them.
+
+    A segment's boundary runs along mesh edges and can wander a triangle onto the next face
+    of the part; the vertices there lie off the segment's surface by up to an edge length,
+    more than the modelling tolerance, and the whole segment would be faceted for them. For
+    each analytic segment with vertices farther than ``tol`` from its surface, the faces using
+    those vertices move to an edge-adjacent analytic segment whose surface holds all three of
+    their vertices within ``tol`` (the closest such surface; a face reached through faces moved
+    before it counts as adjacent). A segment moves all such faces or none: none when one of
+    them finds no neighbour, when they are all its faces, or when it would fall into more
+    edge-connected pieces than before. A face moved away always holds a vertex off its old
+    surface, so it never moves back. (The segmentation's
+    :func:`~igl_heatseg.surfaces.strays.shed_strays` moves the faces that stand across their
+    surface, by their normals, at its own fit tolerance; this is the build's test, at the
+    modelling tolerance, with the neighbour's surface as the judge.)
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        ``0..k-1``.
+    surfaces : list of Surface, length k
+    tol : float
+        Modelling tolerance (model units).
+    movable, receivers : set of int, optional
+        The segments that may give faces, and those that may take them (default: every
+        analytic segment).
+
+    Returns
+    -------
+    labels : (m,) int64
+        A new array (the input is not changed).
+    moved : (p, 3) int64
+        One row per moved face: face, old segment, new segment.
+
+    Examples
+    --------
+    Two unit squares meeting at a right angle along x = 1 (the floor z = 0 and the wall x = 1),
+    with one triangle of the wall labelled as the floor:
+
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [1, 0, 1], [1, 1, 1]])
+    >>> F = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    >>> floor = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> wall = Surface("plane", {"point": np.array([1., 0, 0]), "normal": np.array([1., 0, 0])})
+    >>> labels, moved = settle_borders(V, F, np.array([0, 0, 0, 1]), [floor, wall], 0.01)
+    >>> labels.tolist(), moved.tolist()
+    ([0, 0, 1, 1], [[2, 0, 1]])
+    """
+    F = np.asarray(F, dtype=np.int64)
+    labels = np.array(labels, dtype=np.int64)
+    moved = []
+    TT = None
+    for a, s in enumerate(surfaces):
+        if not s.is_analytic or (movable is not None and a not in movable):
+            continue
+        faces = np.flatnonzero(labels == a)
+        verts = np.unique(F[faces])
+        off = verts[np.abs(s.distance(V[verts])) > tol]
+        if len(off) == 0:
+            continue
+        give = faces[np.isin(F[faces], off).any(axis=1)]
+        if len(give) == len(faces):
+            continue
+        if TT is None:
+            TT = igl.triangle_triangle_adjacency(F)[0]
+        new = _take(V, F, TT, labels, give, a, surfaces, tol, receivers)
+        if new is None:
+            continue
+        if len(np.unique(label_pieces(F, new, TT)[new == a])) > \
+                len(np.unique(label_pieces(F, labels, TT)[faces])):
+            continue
+        moved.extend((int(f), a, int(new[f])) for f in give)
+        labels = new
+    return labels, np.array(moved, dtype=np.int64).reshape(-1, 3)
+
+
+def _take(V, F, TT, labels, give, a, surfaces, tol, receivers):
+    """Labels with every face of ``give`` (segment ``a``'s) taken by the closest edge-adjacent
+    receiving surface within ``tol`` of its vertices, faces taken first counting as adjacent;
+    None when a face finds none."""
+    new = labels.copy()
+    pending = [int(f) for f in give]
+    while pending:
+        left = []
+        for f in pending:
+            best, gap = -1, np.inf
+            for b in {int(new[g]) for g in TT[f] if g >= 0} - {a}:
+                if not surfaces[b].is_analytic or (receivers is not None and b not in receivers):
+                    continue
+                d = float(np.abs(surfaces[b].distance(V[F[f]])).max())
+                if d <= tol and d < gap:
+                    best, gap = b, d
+            if best < 0:
+                left.append(f)
+            else:
+                new[f] = best
+        if len(left) == len(pending):
+            return None
+        pending = left
+    return new
 
 
 def chart_uvs(labels: np.ndarray, surfaces, charts) -> list:

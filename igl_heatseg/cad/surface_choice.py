@@ -1,7 +1,9 @@
 """The surface a segment's B-Rep face is built on: its fitted analytic surface, or a B-spline
 over its chart when the analytic one is too far or misfits, or none (the segment is faceted).
 
-The ``surfaces`` stage of :func:`~igl_heatseg.cad.build.build_brep`.
+The ``surfaces`` stage of :func:`~igl_heatseg.cad.build.build_brep`, and its first step: the
+border faces of a segment that would be faceted for them, given to their neighbours
+(:func:`settle`).
 """
 
 from __future__ import annotations
@@ -15,8 +17,9 @@ from ._ocp import require_ocp
 require_ocp()
 
 from . import freeform, geometry  # noqa: E402
+from .segments import settle_borders  # noqa: E402
 
-__all__ = ["surface_for"]
+__all__ = ["surface_for", "settle"]
 
 
 def _segment(V, F, faces):
@@ -129,3 +132,79 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
     if geom is None or err > tol:
         return None, None, err, f"B-spline fit error {err:.3g} above tol {tol:.3g}"
     return geom, geometry.Projector(None, geom), err, None
+
+
+def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None):
+    """Labels with the border faces moved (:func:`~igl_heatseg.cad.segments.settle_borders`)
+    of the analytic segments that would be faceted for their distance to their surface, to the
+    neighbours built on their analytic surface (those within ``tol`` of it).
+
+    A segment farther than ``tol`` from its surface first gets its B-spline stand-in, as the
+    build would (:func:`surface_for`, kept in ``cache`` under ``(segment, True)``); only a
+    segment that gets none gives faces away. A stand-in built over a ragged border sews
+    where the analytic surface over the settled border need not (a first tuning run with every
+    analytic segment giving faces: on 3 parts, stand-ins replaced by their planes then lost 4,
+    3 and 3 faces to sewing), and a neighbour taking faces keeps its analytic surface.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+    surfaces : list of Surface, length k
+    uv : list or None
+        As for :func:`surface_for`.
+    tol, misfit : float
+        As for :func:`surface_for`.
+    cache : dict
+        ``(segment, bspline allowed) -> surface_for(...)``; the entries of the segments that
+        gave or took faces are dropped.
+    notes : dict or None, optional
+        As for :func:`surface_for`.
+
+    Returns
+    -------
+    labels : (m,) int64
+    moved : (p, 3) int64
+        Face, old segment, new segment.
+    touched : set of int
+        The segments that gave or took faces.
+
+    Examples
+    --------
+    The floor and wall of :func:`~igl_heatseg.cad.segments.settle_borders`: the floor is
+    faceted for the wall's triangle unless that triangle moves.
+
+    >>> import numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [1, 0, 1], [1, 1, 1]])
+    >>> F = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    >>> floor = Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])})
+    >>> wall = Surface("plane", {"point": np.array([1., 0, 0]), "normal": np.array([1., 0, 0])})
+    >>> labels, moved, touched = settle(V, F, np.array([0, 0, 0, 1]), [floor, wall], None,
+    ...                                 0.01, np.inf, {})
+    >>> labels.tolist(), moved.tolist(), sorted(touched)
+    ([0, 0, 1, 1], [[2, 0, 1]], [0, 1])
+    """
+    givers, takers = set(), set()
+    for a, s in enumerate(surfaces):
+        if not s.is_analytic:
+            continue
+        faces = np.flatnonzero(labels == a)
+        if np.abs(s.distance(V[np.unique(F[faces])])).max(initial=0.0) <= tol:
+            takers.add(a)
+            continue
+        if (a, True) not in cache:
+            try:
+                cache[(a, True)] = surface_for(a, s, V, F, faces, uv, tol, misfit=misfit,
+                                               notes=notes)
+            except Exception:  # noqa: BLE001 (OCC, numpy): the build says why, faceting it
+                continue
+        if cache[(a, True)][3] is not None:
+            givers.add(a)
+    labels, moved = settle_borders(V, F, labels, surfaces, tol, givers, takers)
+    touched = set(moved[:, 1].tolist()) | set(moved[:, 2].tolist())
+    for a in touched:
+        cache.pop((a, True), None)
+        cache.pop((a, False), None)
+    return labels, moved, touched

@@ -5,7 +5,8 @@ validation set's, beside mesh2cad).
 Per part, from ``OUT/NAME/report.json`` and ``model.step``: segments and faceted segments,
 a valid closed solid (BRepCheck, a solid, no free edge), the two-sided Hausdorff distance to
 the mesh (the report's) and to the part (to the noise-free mesh of a noisy part, rebuilt from
-the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error and the seconds.
+the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error, the seconds and
+the border faces the build moved to a neighbouring segment.
 Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
 The scores are cached in ``OUT/cad_score.json``.
 
@@ -52,7 +53,8 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
                    reasons=dict(collections.Counter(_reason(f["reason"]) for f in faceted)),
                    solid=bool(fid["valid"] and fid["solids"] >= 1 and fid["free_edges"] == 0),
                    hausdorff=fid["hausdorff_rel"], volume=fid["volume_rel_error"],
-                   seconds=rep["timings"]["total"], to_part=fid["hausdorff_rel"])
+                   seconds=rep["timings"]["total"], to_part=fid["hausdorff_rel"],
+                   moved=len(cad.get("border_faces_moved", [])))
         if entry["noise"] and fid["hausdorff_rel"] is not None:
             from bench_cad import clean_mesh
 
@@ -78,6 +80,7 @@ def _ok(x) -> bool:
 def summary(scores: dict) -> dict:
     """Totals and bars of one run."""
     reasons = collections.Counter()
+    moved = [r.get("moved", 0) for r in scores.values()]
     for r in scores.values():
         reasons.update(r["reasons"])
     return {"parts": len(scores),
@@ -90,6 +93,7 @@ def summary(scores: dict) -> dict:
             "volume error <= 0.5 %": sum(_ok(r["volume"]) for r in scores.values()),
             "seconds (sum)": round(sum(r["seconds"] for r in scores.values()), 1),
             "parts over 30 s": sum(r["seconds"] > 30 for r in scores.values()),
+            "border faces moved (parts)": f"{sum(moved)} ({sum(m > 0 for m in moved)})",
             "faceted by reason": dict(reasons.most_common())}
 
 

@@ -513,8 +513,10 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx["wide_area"], ctx["widened"] = True, set()
     ctx["touching"], ctx["narrowed"] = True, set()
     cache = ctx["surface_cache"] = {}  # (segment, B-splines allowed) -> its surface_for
+    t = time.perf_counter()
     given, moved, touched = surface_choice.settle(V, F, labels, surfaces, uv, ctx["tol"],
                                                   ctx["misfit_rms"], cache, ctx["notes"])
+    timings["surfaces"] = time.perf_counter() - t  # (the stand-ins fitted there are kept)
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, given, surfaces, uv, ctx, closed, timings, progress)
     if touched and (faceted_model or (closed and not solid)):

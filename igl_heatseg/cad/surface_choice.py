@@ -136,15 +136,17 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
 
 def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None):
     """Labels with the border faces moved (:func:`~igl_heatseg.cad.segments.settle_borders`)
-    of the analytic segments that would be faceted for their distance to their surface, to the
-    neighbours built on their analytic surface (those within ``tol`` of it).
+    of the analytic segments that would be faceted for their distance to their surface, to
+    neighbours within ``tol`` of their analytic surface.
 
     A segment farther than ``tol`` from its surface first gets its B-spline stand-in, as the
     build would (:func:`surface_for`, kept in ``cache`` under ``(segment, True)``); only a
     segment that gets none gives faces away. A stand-in built over a ragged border sews
     where the analytic surface over the settled border need not (a first tuning run with every
     analytic segment giving faces: on 3 parts, stand-ins replaced by their planes then lost 4,
-    3 and 3 faces to sewing), and a neighbour taking faces keeps its analytic surface.
+    3 and 3 faces to sewing). A neighbour taking faces is within ``tol`` of its analytic
+    surface (the misfit test of :func:`surface_for` may still give it a B-spline face: once
+    on the fresh parts of 2026-11-29).
 
     Parameters
     ----------

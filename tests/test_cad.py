@@ -1275,7 +1275,7 @@ def _box_with_a_side_triangle_on_top(n: int = 4):
 def test_settle_borders_gives_strayed_border_triangles_back_to_their_side(seed):
     from igl_heatseg.cad.segments import settle_borders
 
-    V, F, labels, _, _ = box_mesh(6) + (None, None)
+    V, F, labels = box_mesh(6)
     TT = igl.triangle_triangle_adjacency(F)[0]
     rng = np.random.default_rng(seed)
     border = np.flatnonzero((labels[np.maximum(TT, 0)] != labels[:, None]).any(axis=1))
@@ -1311,7 +1311,7 @@ def test_settle_borders_moves_nothing_of_a_segment_it_cannot_mend():
     assert np.array_equal(same, alone)
 
 
-def test_border_triangle_on_the_neighbour_is_built_with_it():
+def test_border_triangle_on_the_neighbour_is_built_with_it(monkeypatch):
     import igl_heatseg.cad.surface_choice as choice_mod
 
     V, F, labels, given, f = _box_with_a_side_triangle_on_top()
@@ -1321,13 +1321,9 @@ def test_border_triangle_on_the_neighbour_is_built_with_it():
     assert not res.not_built and res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert abs(res.fidelity["volume"] - 8.0) < 1e-6
     # without the move, the +z side is faceted for that triangle (and +x with it)
-    orig = choice_mod.settle_borders
-    try:
-        choice_mod.settle_borders = lambda V, F, labels, *a, **k: (labels, np.zeros((0, 3),
-                                                                                    np.int64))
-        res = build_brep(V, F, given, box_planes(), tol=0.01)
-    finally:
-        choice_mod.settle_borders = orig
+    monkeypatch.setattr(choice_mod, "settle_borders",
+                        lambda V, F, labels, *a, **k: (labels, np.zeros((0, 3), np.int64)))
+    res = build_brep(V, F, given, box_planes(), tol=0.01)
     assert res.faces[0]["reason"].startswith("surface deviates")
     assert res.border_faces_moved.shape == (0, 3)
 

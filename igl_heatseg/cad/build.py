@@ -22,6 +22,7 @@ import igl
 import numpy as np
 
 from igl_heatseg.errors import MeshError
+from igl_heatseg.mesh.topology import edge_topology
 from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
 
@@ -425,12 +426,6 @@ def _sew_tolerance(ctx, devs) -> float:
     return float(min(max(4 * ctx["curve_tol"], 2.0 * dev), 0.5 * ctx["mean_edge"]))
 
 
-def _is_closed(F) -> bool:
-    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
-    _, counts = np.unique(E, axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
-
-
 def _faceted_result(V, F, ctx, closed, timings, message):
     t = time.perf_counter()
     faces = faceted.triangle_faces(V, F, ctx["vertex_tol"])
@@ -504,7 +499,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     ctx = _tolerances(V, F, surfaces, tol)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
-    closed = _is_closed(F)
+    closed = bool(edge_topology(F).interior.all())  # every edge has two faces
     ctx["notes"] = {}
     ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
                             MISFIT_RMS_FLOOR * ctx["tol"])

@@ -1,7 +1,8 @@
 """Which segments to facet for a defect of the sewn B-Rep: the segment of an invalid or open
 face, or, when that face is a triangle of a faceted patch, the built segments next to it (the
 built faces it touches in the sewn shape; when it touches none, every built segment next to
-its patch)."""
+its patch). A triangle of a faceted patch that sewing closed up (:func:`collapsed`) is
+not blamed on anyone: it is left out of the next build."""
 
 from __future__ import annotations
 
@@ -13,11 +14,11 @@ from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.collections import (  # noqa: E402
     IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as _AncestorMap,
 )
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX  # noqa: E402
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX, TopAbs_WIRE  # noqa: E402
 from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-__all__ = ["surface_owners", "blame", "open_segments", "touching_segments"]
+__all__ = ["surface_owners", "blame", "open_segments", "touching_segments", "collapsed"]
 
 
 def surface_owners(faces, owner) -> dict:
@@ -93,6 +94,43 @@ def touching_segments(shape, owners):
         return out
 
     return touching
+
+
+def collapsed(f) -> bool:
+    """Whether sewing closed up a triangle's face: a loop of fewer than three edges, or more
+    than one loop (two of its corners merged with the same vertex of a neighbour; BRepCheck
+    then fails on the face's orientation or the imbrication of its loops).
+
+    Parameters
+    ----------
+    f : TopoDS_Face
+        A face of a sewn shape, made from one triangle
+        (:func:`~igl_heatseg.cad.faceted.triangle_faces`).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.cad.faceted import triangle_faces
+    >>> [f] = triangle_faces(np.eye(3), np.array([[0, 1, 2]]), 1e-7)
+    >>> collapsed(f)
+    False
+    """
+    loops = 0
+    wires = TopExp_Explorer(f, TopAbs_WIRE)
+    while wires.More():
+        loops += 1
+        edges, ex = 0, TopExp_Explorer(wires.Current(), TopAbs_EDGE)
+        while ex.More():
+            edges += 1
+            ex.Next()
+        if edges < 3:
+            return True
+        wires.Next()
+    return loops != 1
 
 
 def blame(f, owners, status, neighbours, touching=None, narrowed=None):

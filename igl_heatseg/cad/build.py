@@ -40,6 +40,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: 
 
 from . import faceted, geometry, periodic, surface_choice  # noqa: E402
 from .blame import blame as _blame  # noqa: E402
+from .blame import collapsed as _collapsed  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .blame import surface_owners as _surface_owners  # noqa: E402
 from .blame import touching_segments as _touching_segments  # noqa: E402
@@ -570,6 +571,7 @@ def _forget(ctx, segments) -> None:
         ctx["surface_cache"].pop((a, True), None)
         ctx["surface_cache"].pop((a, False), None)
     ctx.pop("inner", None)
+    ctx.pop("dropped", None)
 
 
 def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
@@ -579,8 +581,11 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     cache = ctx["surface_cache"]  # shared by the builds with and without B-splines
     neighbours = segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it
+    dropped = ctx.setdefault("dropped", set())  # faceted triangles sewing closed up
+    extra = False  # whether a build went to leaving them out (besides MAX_REBUILDS)
     try:
-        for attempt in range(MAX_REBUILDS + 1):
+        for attempt in range(MAX_REBUILDS + 2):  # (one more when triangles were left out)
+            attempt -= extra
             faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
                                                          timings, progress, skip, cache)
             t = time.perf_counter()
@@ -589,9 +594,18 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             t = time.perf_counter()
+            closed_up: set = set()
             bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
-                                    ctx["touching"], ctx["narrowed"], ctx["exempt"])
+                                    ctx["touching"], ctx["narrowed"], ctx["exempt"],
+                                    ctx["droppable"], closed_up)
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
+            if closed_up and bad is not None and not extra:
+                logger.warning("sewing closed up %d faceted triangle(s); building again without"
+                               " them (and segments %s faceted)", len(closed_up), sorted(bad))
+                dropped |= closed_up
+                extra = True
+                skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
+                continue
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours, ctx["touching"],
                                       ctx["narrowed"])
@@ -627,6 +641,9 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
             if n:
                 message = (message + "; " if message else "") + (
                     f"{n} face(s) faceted after {what} in the sewn shell")
+        if dropped:
+            message = (message + "; " if message else "") + (
+                f"{len(dropped)} faceted triangle(s) left out: sewing closed them up")
         faceted_model, solid = False, info["solid"]
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
         if isinstance(exc, _InvalidBRep):
@@ -646,16 +663,18 @@ class _InvalidBRep(RuntimeError):
 
 
 def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
-                      narrowed=None, exempt=None):
+                      narrowed=None, exempt=None, droppable=None, closed_up=None):
     """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
     (:func:`_invalid_faces`; ``valid``: the shape's verdict when known; ``exempt``: faceted
     triangles by surface, left out of its STEP round trip): a built segment's own
     face, or, for an invalid triangle of a faceted segment, the built segments whose faces it
     touches in ``shape`` when ``narrow`` (else, or when it touches none, those next to its
     segment, ``neighbours``: segment -> set of adjacent segments; ``narrowed`` gets the
-    faceted segments whose blame touching narrowed). [] when
-    the shape is valid; None when a face is to blame that no built segment accounts for (a
-    unified face, an isolated faceted patch, the shell itself)."""
+    faceted segments whose blame touching narrowed). A triangle that sewing closed up
+    (:func:`~igl_heatseg.cad.blame.collapsed`) and ``droppable`` (surface -> mesh face: no
+    wider than the sewing tolerance) is blamed on no one: its mesh face goes to the set
+    ``closed_up``. [] when the shape is valid; None when a face is to blame that no built
+    segment accounts for (a unified face, an isolated faceted patch, the shell itself)."""
     bad_faces = _invalid_faces(shape, valid, exempt)
     if not bad_faces:
         return bad_faces
@@ -663,11 +682,15 @@ def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, 
     touching = _touching_segments(shape, owners) if narrow else None
     bad = set()
     for f in bad_faces:
+        row = (droppable or {}).get(BRep_Tool.Surface_s(f))
+        if row is not None and closed_up is not None and _collapsed(f):
+            closed_up.add(row)
+            continue
         who = _blame(f, owners, status, neighbours, touching, narrowed)
         if who is None:
             return None
         bad |= who
-    return bad or None
+    return bad if bad or closed_up else None
 
 
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):
@@ -740,6 +763,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     t = time.perf_counter()
     faces, status, owner = [], [], []
     ctx["exempt"] = {}  # faceted triangles left out of the STEP round trip, by surface
+    ctx["droppable"] = {}  # faceted triangles sewing may close up: surface -> mesh face
+    gone = np.fromiter(ctx.get("dropped", ()), dtype=np.int64)  # those it closed up before
     areas = segment_areas(V, F, labels, k)
     for a in range(k):
         progress("faces", a / k)
@@ -750,17 +775,22 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             owner.append(a)
         else:
             logger.warning("face %d (%s) not built: %s", a, surfaces[a].kind, reason)
-            tri, rows = faceted.triangle_faces(snap, F[seg_faces[a]], ctx["vertex_tol"],
+            mine = seg_faces[a][~np.isin(seg_faces[a], gone)]
+            tri, rows = faceted.triangle_faces(snap, F[mine], ctx["vertex_tol"],
                                                return_index=True)
             if "inner" not in ctx:  # (the same for every build with these labels: _forget)
                 ctx["inner"] = inner_vertices(F, labels)
             inner = ctx["inner"]
             ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
-                inner[F[seg_faces[a][rows]]].all(axis=1)))
+                inner[F[mine[rows]]].all(axis=1)))
+            ctx["droppable"].update((BRep_Tool.Surface_s(tri[i]), int(mine[rows[i]])) for i in
+                                    np.flatnonzero(faceted.thin(snap, F[mine[rows]],
+                                                                ctx["sew_tol"])))
             faces.extend(tri)
             owner.extend([a] * len(tri))
         status.append(dict(index=a, kind=ctx["fitted"][a].kind,
                            status="built" if face is not None else "faceted", reason=reason,
+                           dropped=0 if face is not None else len(seg_faces[a]) - len(mine),
                            built_as=built_as[a] if face is not None else None,
                            max_dev=None if not np.isfinite(devs[a]) else float(devs[a]),
                            why_bspline=ctx["notes"].get(a) if built_as[a] == "bspline" and

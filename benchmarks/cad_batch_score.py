@@ -5,8 +5,9 @@ validation set's, beside mesh2cad).
 Per part, from ``OUT/NAME/report.json`` and ``model.step``: segments and faceted segments,
 a valid closed solid (BRepCheck, a solid, no free edge), the two-sided Hausdorff distance to
 the mesh (the report's) and to the part (to the noise-free mesh of a noisy part, rebuilt from
-the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error, the seconds and
-the border faces the build moved to a neighbouring segment.
+the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error, the seconds, the
+border faces the build moved to a neighbouring segment, the B-Rep's faces (a faceted segment
+adds one per triangle) and the faceted triangles left out because sewing closed them up.
 Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
 The scores are cached in ``OUT/cad_score.json``.
 
@@ -43,6 +44,10 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
     path = out / "cad_score.json"
     scores = json.loads(path.read_text()) if path.exists() else {}
     for d in sorted(p for p in out.iterdir() if (p / "report.json").exists()):
+        if d.name in scores and "brep_faces" not in scores[d.name]:  # (a cache of before)
+            cad = json.loads((d / "report.json").read_text())["cad"]
+            scores[d.name].update(brep_faces=cad["fidelity"]["faces"], dropped=sum(
+                f.get("dropped", 0) for f in cad["faces"]))
         if d.name in scores or d.name not in manifest:
             continue
         rep = json.loads((d / "report.json").read_text())
@@ -54,7 +59,8 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
                    solid=bool(fid["valid"] and fid["solids"] >= 1 and fid["free_edges"] == 0),
                    hausdorff=fid["hausdorff_rel"], volume=fid["volume_rel_error"],
                    seconds=rep["timings"]["total"], to_part=fid["hausdorff_rel"],
-                   moved=len(cad.get("border_faces_moved", [])))
+                   moved=len(cad.get("border_faces_moved", [])), brep_faces=fid["faces"],
+                   dropped=sum(f.get("dropped", 0) for f in cad["faces"]))
         if entry["noise"] and fid["hausdorff_rel"] is not None:
             from bench_cad import clean_mesh
 
@@ -81,6 +87,7 @@ def summary(scores: dict) -> dict:
     """Totals and bars of one run."""
     reasons = collections.Counter()
     moved = [r.get("moved", 0) for r in scores.values()]
+    dropped = [r.get("dropped", 0) for r in scores.values()]
     for r in scores.values():
         reasons.update(r["reasons"])
     return {"parts": len(scores),
@@ -94,6 +101,9 @@ def summary(scores: dict) -> dict:
             "seconds (sum)": round(sum(r["seconds"] for r in scores.values()), 1),
             "parts over 30 s": sum(r["seconds"] > 30 for r in scores.values()),
             "border faces moved (parts)": f"{sum(moved)} ({sum(m > 0 for m in moved)})",
+            "B-Rep faces (sum)": sum(r.get("brep_faces") or 0 for r in scores.values()),
+            "faceted triangles left out (parts)": f"{sum(dropped)} "
+                                                  f"({sum(m > 0 for m in dropped)})",
             "faceted by reason": dict(reasons.most_common())}
 
 
@@ -102,7 +112,7 @@ def _cell(r: dict | None) -> str:
         return "missing"
     return (f"faceted {r['faceted']:3d}/{r['segments']:3d} {'solid' if r['solid'] else 'no solid'}"
             f" H {_pct(r['hausdorff'])} to part {_pct(r['to_part'])} vol {_pct(r['volume'])}"
-            f" {r['seconds']:.0f} s")
+            f" faces {r.get('brep_faces')} {r['seconds']:.0f} s")
 
 
 def main(argv=None) -> int:
@@ -114,7 +124,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     cache = args.clean or args.set.parent / "clean"
     runs = [score_run(args.set, out, cache) for out in args.runs[:2]]
-    keys = ("faceted", "solid", "hausdorff", "to_part", "volume")
+    keys = ("faceted", "solid", "hausdorff", "to_part", "volume", "brep_faces")
     for name in sorted(set().union(*runs)):
         rows = [run.get(name) for run in runs]
         changed = len(rows) == 2 and (None in rows or any(rows[0][k] != rows[1][k]

@@ -14,7 +14,7 @@ pytest.importorskip("OCP")
 from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.GeomAbs import GeomAbs_SurfaceType  # noqa: E402
 
-from igl_heatseg.cad import brep_fidelity, build_brep, read_step, write_step  # noqa: E402
+from igl_heatseg.cad import blame, brep_fidelity, build_brep, read_step, write_step  # noqa: E402
 from igl_heatseg.cad.fidelity import faces_of  # noqa: E402
 from igl_heatseg.errors import MeshError  # noqa: E402
 from igl_heatseg.surfaces.model import Surface  # noqa: E402
@@ -827,7 +827,7 @@ def test_an_invalid_faceted_triangle_facets_only_the_built_faces_it_touches(monk
         return [min(faces_of(shape), key=lambda f: np.linalg.norm(_centroid(f) - target))]
 
     monkeypatch.setattr(build_mod.surface_choice, "surface_for", side_0_faceted)
-    monkeypatch.setattr(build_mod, "_invalid_faces", one_triangle_invalid)
+    monkeypatch.setattr(blame, "invalid_faces", one_triangle_invalid)
     V, F, labels = box_mesh(4)
     inner = (np.abs(V[:, 2] - 1) < 1e-9) & np.all(np.abs(V[:, :2]) < 1 - 1e-9, axis=1)
     V[inner, 2] += np.random.default_rng(0).uniform(0.005, 0.02, inner.sum())  # not coplanar
@@ -1311,7 +1311,7 @@ def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbo
     it touches, as before."""
     import igl_heatseg.cad.build as build_mod
 
-    real_surface_for, real_invalid = build_mod.surface_choice.surface_for, build_mod._invalid_faces
+    real_surface_for, real_invalid = build_mod.surface_choice.surface_for, blame.invalid_faces
     monkeypatch.setattr(build_mod.surface_choice, "surface_for", lambda a, *r, **k: (
         (None, None, 1.0, "faceted for the test") if a == 0 else real_surface_for(a, *r, **k)))
     V, F, labels = box_mesh(4)
@@ -1337,8 +1337,8 @@ def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbo
         reported.append(best)
         return [best]
 
-    monkeypatch.setattr(build_mod, "_invalid_faces", first_reports_one)
-    monkeypatch.setattr(build_mod, "_collapsed", lambda f: True)
+    monkeypatch.setattr(blame, "invalid_faces", first_reports_one)
+    monkeypatch.setattr(blame, "collapsed", lambda f: True)
     res = build_brep(V, F, labels, box_planes())
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
     built = [f["index"] for f in res.faces if f["status"] == "built"]

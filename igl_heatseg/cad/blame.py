@@ -18,7 +18,10 @@ from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX, TopAbs_WIRE  # n
 from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
-__all__ = ["surface_owners", "blame", "open_segments", "touching_segments", "collapsed"]
+from .roundtrip import invalid_faces  # noqa: E402
+
+__all__ = ["surface_owners", "blame", "open_segments", "touching_segments", "collapsed",
+           "invalid_segments"]
 
 
 def surface_owners(faces, owner) -> dict:
@@ -228,3 +231,63 @@ def open_segments(shape, faces, owner, status, neighbours, narrow=False, narrowe
             continue
         out |= blame(face, owners, status, neighbours, touching, narrowed) or set()
     return out
+
+
+def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
+                     narrowed=None, exempt=None, droppable=None, closed_up=None):
+    """Segments to facet for the faces of a sewn shape that fail BRepCheck.
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        The sewn shape.
+    faces, owner, status, neighbours
+        As for :func:`surface_owners` and :func:`blame`.
+    valid : bool, optional
+        The shape's BRepCheck verdict when known
+        (:func:`~igl_heatseg.cad.roundtrip.invalid_faces`).
+    narrow : bool
+        Blame an invalid triangle of a faceted segment on the built faces it touches in
+        ``shape`` (else, or when it touches none, on the built segments next to its segment).
+    narrowed : set, optional
+        Gets the faceted segments whose blame touching narrowed.
+    exempt : dict, optional
+        Faceted triangles by surface, left out of the STEP round trip.
+    droppable : callable, optional
+        ``Geom_Surface -> int or None``: the mesh face of a faceted triangle that a slit
+        left by it would close (no wider than the sewing tolerance), else None.
+    closed_up : set, optional
+        Gets the mesh faces of the droppable triangles that sewing closed up
+        (:func:`collapsed`): those are blamed on no one.
+
+    Returns
+    -------
+    set of int, [] or None
+        The segments to facet (empty when only triangles went to ``closed_up``); [] when the
+        shape is valid; None when a face is to blame that no built segment accounts for (a
+        unified face, an isolated faceted patch, the shell itself).
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from igl_heatseg.cad.fidelity import faces_of
+    >>> box = BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()
+    >>> invalid_segments(box, faces_of(box), [0] * 6, [{"status": "built"}])
+    []
+    """
+    bad_faces = invalid_faces(shape, valid, exempt)
+    if not bad_faces:
+        return bad_faces
+    owners = surface_owners(faces, owner)
+    touching = touching_segments(shape, owners) if narrow else None
+    bad: set = set()
+    for f in bad_faces:
+        row = droppable(BRep_Tool.Surface_s(f)) if droppable is not None else None
+        if row is not None and closed_up is not None and collapsed(f):
+            closed_up.add(row)
+            continue
+        who = blame(f, owners, status, neighbours, touching, narrowed)
+        if who is None:
+            return None
+        bad |= who
+    return bad if bad or closed_up else None

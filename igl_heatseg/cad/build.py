@@ -39,15 +39,11 @@ from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 from . import faceted, geometry, periodic, surface_choice  # noqa: E402
-from .blame import blame as _blame  # noqa: E402
-from .blame import collapsed as _collapsed  # noqa: E402
+from .blame import invalid_segments as _invalid_segments  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
-from .blame import surface_owners as _surface_owners  # noqa: E402
-from .blame import touching_segments as _touching_segments  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_points  # noqa: E402
 from .result import CadResult  # noqa: E402
-from .roundtrip import invalid_faces as _invalid_faces  # noqa: E402
 from .segments import check_inputs, typical_rms  # noqa: E402
 from .sew import assemble  # noqa: E402
 from .topology import (  # noqa: E402
@@ -597,7 +593,8 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
             closed_up: set = set()
             bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
                                     ctx["touching"], ctx["narrowed"], ctx["exempt"],
-                                    ctx["droppable"], closed_up)
+                                    _droppable(V, F, ctx["triangles"], info["sew_tol"]),
+                                    closed_up)
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if closed_up and bad is not None and not extra:
                 logger.warning("sewing closed up %d faceted triangle(s); building again without"
@@ -662,35 +659,14 @@ class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
 
 
-def _invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
-                      narrowed=None, exempt=None, droppable=None, closed_up=None):
-    """Segments to facet for the faces of the sewn ``shape`` that fail BRepCheck
-    (:func:`_invalid_faces`; ``valid``: the shape's verdict when known; ``exempt``: faceted
-    triangles by surface, left out of its STEP round trip): a built segment's own
-    face, or, for an invalid triangle of a faceted segment, the built segments whose faces it
-    touches in ``shape`` when ``narrow`` (else, or when it touches none, those next to its
-    segment, ``neighbours``: segment -> set of adjacent segments; ``narrowed`` gets the
-    faceted segments whose blame touching narrowed). A triangle that sewing closed up
-    (:func:`~igl_heatseg.cad.blame.collapsed`) and ``droppable`` (surface -> mesh face: no
-    wider than the sewing tolerance) is blamed on no one: its mesh face goes to the set
-    ``closed_up``. [] when the shape is valid; None when a face is to blame that no built
-    segment accounts for (a unified face, an isolated faceted patch, the shell itself)."""
-    bad_faces = _invalid_faces(shape, valid, exempt)
-    if not bad_faces:
-        return bad_faces
-    owners = _surface_owners(faces, owner)
-    touching = _touching_segments(shape, owners) if narrow else None
-    bad = set()
-    for f in bad_faces:
-        row = (droppable or {}).get(BRep_Tool.Surface_s(f))
-        if row is not None and closed_up is not None and _collapsed(f):
-            closed_up.add(row)
-            continue
-        who = _blame(f, owners, status, neighbours, touching, narrowed)
-        if who is None:
-            return None
-        bad |= who
-    return bad if bad or closed_up else None
+def _droppable(V, F, triangles, width):
+    """``surface -> mesh face or None``: the faceted triangles (``triangles``, by surface) no
+    wider than ``width``, the tolerance the shell was sewn with (a slit they leave closes)."""
+    def row(srf):
+        r = triangles.get(srf)
+        return r if r is not None and faceted.thin(V, F[[r]], width)[0] else None
+
+    return row
 
 
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):
@@ -763,7 +739,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     t = time.perf_counter()
     faces, status, owner = [], [], []
     ctx["exempt"] = {}  # faceted triangles left out of the STEP round trip, by surface
-    ctx["droppable"] = {}  # faceted triangles sewing may close up: surface -> mesh face
+    ctx["triangles"] = {}  # faceted triangles along patch borders: surface -> mesh face
     gone = np.fromiter(ctx.get("dropped", ()), dtype=np.int64)  # those it closed up before
     areas = segment_areas(V, F, labels, k)
     for a in range(k):
@@ -783,9 +759,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             inner = ctx["inner"]
             ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
                 inner[F[mine[rows]]].all(axis=1)))
-            ctx["droppable"].update((BRep_Tool.Surface_s(tri[i]), int(mine[rows[i]])) for i in
-                                    np.flatnonzero(faceted.thin(snap, F[mine[rows]],
-                                                                ctx["sew_tol"])))
+            ctx["triangles"].update((BRep_Tool.Surface_s(tri[i]), int(mine[rows[i]])) for i in
+                                    np.flatnonzero(~inner[F[mine[rows]]].all(axis=1)))
             faces.extend(tri)
             owner.extend([a] * len(tri))
         status.append(dict(index=a, kind=ctx["fitted"][a].kind,

@@ -1301,6 +1301,18 @@ def test_a_triangle_sewing_closed_up_is_collapsed():
     assert not any(collapsed(f) for f in faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()))
 
 
+def test_a_triangle_is_droppable_when_the_tolerance_sewn_with_covers_its_height():
+    import igl_heatseg.cad.build as build_mod
+
+    V = np.array([[0.0, 0, 0], [2, 0, 0], [1, 0.05, 0], [1, 1, 0]])
+    F = np.array([[0, 1, 2], [0, 1, 3]])
+    tri = {"thin": 0, "fat": 1}
+    assert build_mod._droppable(V, F, tri, 0.1)("thin") == 0
+    assert build_mod._droppable(V, F, tri, 0.01)("thin") is None  # wider than the sewing
+    assert build_mod._droppable(V, F, tri, 0.1)("fat") is None
+    assert build_mod._droppable(V, F, tri, 0.1)("not a faceted triangle") is None
+
+
 @pytest.mark.parametrize("thin_one", [True, False])
 def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbour(
         monkeypatch, thin_one):

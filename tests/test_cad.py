@@ -1260,24 +1260,6 @@ def test_faceted_patch_skips_a_triangle_with_a_side_within_the_tolerance():
     assert len(faces) == 2
 
 
-def test_thin_triangles_are_those_with_a_height_within_the_width():
-    from igl_heatseg.cad.faceted import thin
-
-    rng = np.random.default_rng(7)
-    V = rng.normal(size=(300, 3))
-    F = rng.integers(0, 300, size=(500, 3))
-    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
-    heights = []
-    for i, j, k in F:  # each corner's distance to the line through the other two
-        hs = [np.linalg.norm(np.cross(V[q] - V[p], V[r] - V[p])) / np.linalg.norm(V[q] - V[p])
-              for p, q, r in ((i, j, k), (j, k, i), (k, i, j))]
-        heights.append(min(hs))
-    heights = np.array(heights)
-    for width in (0.05, 0.3, 1.0):
-        assert np.array_equal(thin(V, F, width), heights <= width)
-    assert thin(V, F[:0], 1.0).shape == (0,)
-
-
 def test_a_triangle_sewing_closed_up_is_collapsed():
     from OCP.BRepBuilderAPI import (
         BRepBuilderAPI_MakeEdge,
@@ -1301,26 +1283,14 @@ def test_a_triangle_sewing_closed_up_is_collapsed():
     assert not any(collapsed(f) for f in faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape()))
 
 
-def test_a_triangle_is_droppable_when_the_tolerance_sewn_with_covers_its_height():
-    import igl_heatseg.cad.build as build_mod
-
-    V = np.array([[0.0, 0, 0], [2, 0, 0], [1, 0.05, 0], [1, 1, 0]])
-    F = np.array([[0, 1, 2], [0, 1, 3]])
-    tri = {"thin": 0, "fat": 1}
-    assert build_mod._droppable(V, F, tri, 0.1)("thin") == 0
-    assert build_mod._droppable(V, F, tri, 0.01)("thin") is None  # wider than the sewing
-    assert build_mod._droppable(V, F, tri, 0.1)("fat") is None
-    assert build_mod._droppable(V, F, tri, 0.1)("not a faceted triangle") is None
-
-
-@pytest.mark.parametrize("thin_one", [True, False])
+@pytest.mark.parametrize("closed_up", [True, False])
 def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbour(
-        monkeypatch, thin_one):
+        monkeypatch, closed_up):
     """Side 0 of a 4 x 4 cube is faceted and one of its border vertices is moved to 1e-4 of
     the next one along side 5's edge, so that a triangle of side 0 is 1e-4 thin. Reported
-    closed up by sewing, the thin triangle is left out of the next build (sewing closes its
-    slit) and side 5 stays built; a triangle that is not thin is blamed on the built faces
-    it touches, as before."""
+    invalid and closed up by sewing, the triangle is left out of the next build (sewing closes
+    its slit) and side 5 stays built; reported invalid but not closed up, it is blamed on the
+    built faces it touches, as before."""
     import igl_heatseg.cad.build as build_mod
 
     real_surface_for, real_invalid = build_mod.surface_choice.surface_for, blame.invalid_faces
@@ -1333,16 +1303,14 @@ def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbo
     top = (np.abs(V[:, 2] - 1) < 1e-9) & (np.abs(V[:, :2]) < 0.99).all(axis=1)
     V[top, 2] += np.random.default_rng(0).uniform(0.005, 0.02, top.sum())  # not coplanar
     side0 = np.flatnonzero(labels == 0)
-    corners = F[side0]
-    at_ab = side0[np.isin(corners, [a, b]).sum(axis=1) == 2]
+    at_ab = side0[np.isin(F[side0], [a, b]).sum(axis=1) == 2]
     assert len(at_ab) == 1  # the one triangle of side 0 with the short side
     reported = []
 
     def first_reports_one(shape, *args):
         if reported:
             return real_invalid(shape, *args)
-        target = at_ab[0] if thin_one else side0[np.argmax(V[F[side0]][:, :, 2].mean(1))]
-        P = V[F[target]]  # the sewn face with the triangle's corners
+        P = V[F[at_ab[0]]]  # the sewn face with the triangle's corners
         best = min(faces_of(shape), key=lambda f: np.abs(
             np.sort(build_mod.face_points(f, 1.0), axis=0)[[0, -1]]
             - np.sort(P, axis=0)[[0, -1]]).max())
@@ -1350,16 +1318,16 @@ def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbo
         return [best]
 
     monkeypatch.setattr(blame, "invalid_faces", first_reports_one)
-    monkeypatch.setattr(blame, "collapsed", lambda f: True)
+    monkeypatch.setattr(blame, "collapsed", lambda f: closed_up)
     res = build_brep(V, F, labels, box_planes())
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
     built = [f["index"] for f in res.faces if f["status"] == "built"]
-    if thin_one:
+    if closed_up:
         assert res.faces[0]["dropped"] == 1 and built == [1, 2, 3, 4, 5]
         assert "1 faceted triangle(s) left out" in res.message
         assert res.fidelity["faces"] == 5 + 32 - 1
     else:
-        assert res.faces[0]["dropped"] == 0 and len(built) < 5
+        assert res.faces[0]["dropped"] == 0 and 5 not in built
 
 
 def _box_with_a_side_triangle_on_top(n: int = 4):

@@ -254,8 +254,8 @@ def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, n
     exempt : dict, optional
         Faceted triangles by surface, left out of the STEP round trip.
     droppable : callable, optional
-        ``Geom_Surface -> int or None``: the mesh face of a faceted triangle that a slit
-        left by it would close (no wider than the sewing tolerance), else None.
+        ``Geom_Surface -> int or None``: the mesh face of a triangle of a faceted patch that
+        may be left out (one along the patch's border), else None.
     closed_up : set, optional
         Gets the mesh faces of the droppable triangles that sewing closed up
         (:func:`collapsed`): those are blamed on no one.

@@ -577,7 +577,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     cache = ctx["surface_cache"]  # shared by the builds with and without B-splines
     neighbours = segment_neighbours(F, labels, len(surfaces))
     kept = None  # the first valid open shell, kept in case faceting does not close it
-    dropped = ctx.setdefault("dropped", set())  # faceted triangles sewing closed up
+    dropped = ctx.setdefault("dropped", set())  # faceted triangles sewing closed up: left out
     extra = False  # whether a build went to leaving them out (besides MAX_REBUILDS)
     try:
         for attempt in range(MAX_REBUILDS + 2):  # (one more when triangles were left out)
@@ -593,8 +593,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
             closed_up: set = set()
             bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
                                     ctx["touching"], ctx["narrowed"], ctx["exempt"],
-                                    _droppable(V, F, ctx["triangles"], info["sew_tol"]),
-                                    closed_up)
+                                    ctx["triangles"].get, closed_up)
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
             if closed_up and bad is not None and not extra:
                 logger.warning("sewing closed up %d faceted triangle(s); building again without"
@@ -657,16 +656,6 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
 
 class _InvalidBRep(RuntimeError):
     """The sewn shape stays invalid after the rebuilds."""
-
-
-def _droppable(V, F, triangles, width):
-    """``surface -> mesh face or None``: the faceted triangles (``triangles``, by surface) no
-    wider than ``width``, the tolerance the shell was sewn with (a slit they leave closes)."""
-    def row(srf):
-        r = triangles.get(srf)
-        return r if r is not None and faceted.thin(V, F[[r]], width)[0] else None
-
-    return row
 
 
 def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, cache=None):

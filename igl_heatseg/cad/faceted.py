@@ -18,7 +18,7 @@ from OCP.TopoDS import TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["triangle_faces", "thin"]
+__all__ = ["triangle_faces"]
 
 #: Triangles with a doubled area below this fraction of the squared bbox diagonal are skipped
 #: (OCC cannot make a plane through them; the sewing closes the sliver), and so are those with
@@ -99,33 +99,3 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float, return_index: bool 
                     "skipped (the sewing closes them)", skipped)
     return (faces, np.asarray(index, dtype=np.int64)) if return_index else faces
 
-
-def thin(V: np.ndarray, F: np.ndarray, width: float) -> np.ndarray:
-    """Triangles whose smallest height is at most ``width``: a gap they leave in a patch is
-    that narrow, so a sewing at that tolerance closes it.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    width : float
-        Model units (e.g. the sewing tolerance).
-
-    Returns
-    -------
-    (m,) bool
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> V = np.array([[0., 0, 0], [4, 0, 0], [2, 1, 0], [2, 0.1, 0]])
-    >>> thin(V, np.array([[0, 1, 2], [0, 1, 3]]), 0.5).tolist()
-    [False, True]
-    """
-    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
-    if not len(F):
-        return np.zeros(0, dtype=bool)
-    E = np.stack([V[F[:, 1]] - V[F[:, 2]], V[F[:, 2]] - V[F[:, 0]], V[F[:, 0]] - V[F[:, 1]]])
-    longest = np.linalg.norm(E, axis=2).max(axis=0)
-    twice_area = np.linalg.norm(np.cross(E[1], E[2]), axis=1)
-    return twice_area <= width * longest

@@ -26,8 +26,8 @@ class CadResult:
         distance to the surface built, else to the fitted one), ``why_bspline`` (for those
         B-spline faces, which test sent them there and both fits' deviations; else None),
         ``dropped`` (of a faceted segment: its triangles left out because sewing closed them
-        up, each no wider than the sewing tolerance, whose slit the sewing closes; 0 for a
-        built one; absent when the whole model was faceted).
+        up, two of their corners merged; 0 for a built one; absent when the whole model was
+        faceted).
     fidelity : dict
         :func:`igl_heatseg.cad.fidelity.brep_fidelity` of ``shape`` against the mesh.
     timings : dict

@@ -637,9 +637,10 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
             if n:
                 message = (message + "; " if message else "") + (
                     f"{n} face(s) faceted after {what} in the sewn shell")
-        if dropped:
+        n = sum(st["dropped"] for st in status)  # (of the segments faceted in this build)
+        if n:
             message = (message + "; " if message else "") + (
-                f"{len(dropped)} faceted triangle(s) left out: sewing closed them up")
+                f"{n} faceted triangle(s) left out: sewing closed them up")
         faceted_model, solid = False, info["solid"]
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
         if isinstance(exc, _InvalidBRep):

@@ -590,12 +590,14 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                                    max_tol=SEW_MAX_EDGE * ctx["mean_edge"])
             timings["sew"] = timings.get("sew", 0.0) + time.perf_counter() - t
             t = time.perf_counter()
-            closed_up: set = set()
+            # (the first build leaving triangles out is extra; later ones count as rebuilds,
+            # and at the last one, closed-up triangles are blamed on their neighbours)
+            closed_up = set() if not extra or attempt < MAX_REBUILDS else None
             bad = _invalid_segments(shape, faces, owner, status, neighbours, info["valid"],
                                     ctx["touching"], ctx["narrowed"], ctx["exempt"],
                                     ctx["triangles"].get, closed_up)
             timings["check"] = timings.get("check", 0.0) + time.perf_counter() - t
-            if closed_up and bad is not None and not extra:
+            if closed_up and bad is not None:
                 logger.warning("sewing closed up %d faceted triangle(s); building again without"
                                " them (and segments %s faceted)", len(closed_up), sorted(bad))
                 dropped |= closed_up

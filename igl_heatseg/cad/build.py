@@ -108,7 +108,8 @@ SEW_MAX_EDGE = 0.5
 #: Rebuilds with the segments whose sewn faces fail BRepCheck faceted, before the whole model
 #: is faceted (an invalid face can hang OCC's mesher, and a CAD program reading the file);
 #: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
-#: (when that does not give a valid solid, the first open shell is written).
+#: (when that does not give a valid solid, the first open shell is written). A build that
+#: leaves out faceted triangles sewing closed up (:func:`~.blame.collapsed`) is one more.
 MAX_REBUILDS = 2
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
@@ -460,8 +461,10 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     CadResult
         Never raises for geometry it cannot build: such faces are faceted and reported. A
         segment whose face fails BRepCheck once sewn (in memory, or read back from STEP) is
-        faceted and the model rebuilt (up to MAX_REBUILDS times), as are the built segments
-        along the free edges of a closed mesh's open shell (kept when that gives a valid solid,
+        faceted and the model rebuilt (up to MAX_REBUILDS times; a faceted triangle that
+        sewing closed up is left out instead, the first time in one build more), as are the
+        built segments along the free edges of a closed mesh's open shell (kept when that gives
+        a valid solid,
         else the first open shell is returned); a failed build, or a model still invalid,
         returns the fully faceted model (``faceted_model=True``), unless the mesh has several
         edge-connected parts: they are then built one by one

@@ -464,10 +464,9 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         faceted and the model rebuilt (up to MAX_REBUILDS times; a faceted triangle that
         sewing closed up is left out instead, the first time in one build more), as are the
         built segments along the free edges of a closed mesh's open shell (kept when that gives
-        a valid solid,
-        else the first open shell is returned); a failed build, or a model still invalid,
-        returns the fully faceted model (``faceted_model=True``), unless the mesh has several
-        edge-connected parts: they are then built one by one
+        a valid solid, else the first open shell is returned); a failed build, or a model still
+        invalid, returns the fully faceted model (``faceted_model=True``), unless the mesh has
+        several edge-connected parts: they are then built one by one
         (:func:`~igl_heatseg.cad.components.build_by_component`; a compound).
         Before that, a model that came out fully faceted, or not a solid from a closed mesh,
         is built again without its B-spline stand-ins for analytic segments; one not a solid

@@ -750,11 +750,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                                                return_index=True)
             if "inner" not in ctx:  # (the same for every build with these labels: _forget)
                 ctx["inner"] = inner_vertices(F, labels)
-            inner = ctx["inner"]
-            ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i]) for i in np.flatnonzero(
-                inner[F[mine[rows]]].all(axis=1)))
-            ctx["triangles"].update((BRep_Tool.Surface_s(tri[i]), int(mine[rows[i]])) for i in
-                                    np.flatnonzero(~inner[F[mine[rows]]].all(axis=1)))
+            inside = ctx["inner"][F[mine[rows]]].all(axis=1)  # sewing does not touch these
+            ctx["exempt"].update((BRep_Tool.Surface_s(tri[i]), tri[i])
+                                 for i in np.flatnonzero(inside))
+            ctx["triangles"].update((BRep_Tool.Surface_s(tri[i]), int(mine[rows[i]]))
+                                    for i in np.flatnonzero(~inside))
             faces.extend(tri)
             owner.extend([a] * len(tri))
         status.append(dict(index=a, kind=ctx["fitted"][a].kind,

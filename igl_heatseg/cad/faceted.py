@@ -98,4 +98,3 @@ def triangle_faces(V: np.ndarray, F: np.ndarray, tol: float, return_index: bool 
         logger.info("faceted patch: %d triangle(s) with a side shorter than the tolerance "
                     "skipped (the sewing closes them)", skipped)
     return (faces, np.asarray(index, dtype=np.int64)) if return_index else faces
-

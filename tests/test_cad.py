@@ -15,7 +15,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.GeomAbs import GeomAbs_SurfaceType  # noqa: E402
 
 from igl_heatseg.cad import blame, brep_fidelity, build_brep, read_step, write_step  # noqa: E402
-from igl_heatseg.cad.fidelity import faces_of  # noqa: E402
+from igl_heatseg.cad.fidelity import face_points, faces_of  # noqa: E402
 from igl_heatseg.errors import MeshError  # noqa: E402
 from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
@@ -1161,12 +1161,43 @@ def test_model_broken_by_a_bspline_stand_in_is_built_again_without_it(monkeypatc
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
 
 
+def test_face_samples_stay_inside_the_trim_and_show_a_wrong_side():
+    # a 1 x 1 square trimmed out of a bounded 10 x 10 plane: its samples stay in the square;
+    # trimmed to the wrong side of its loop (the complement), they cover the whole plane
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.Geom import Geom_Plane, Geom_RectangularTrimmedSurface
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+    from OCP.TopoDS import TopoDS_Face
+
+    from igl_heatseg.cad.fidelity import face_samples
+
+    plane = Geom_RectangularTrimmedSurface(
+        Geom_Plane(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1))), 0.0, 10.0, 0.0, 10.0)
+    poly = BRepBuilderAPI_MakePolygon()
+    for x, y in ((4, 4), (5, 4), (5, 5), (4, 5)):
+        poly.Add(gp_Pnt(x, y, 0))
+    poly.Close()
+    wire = poly.Wire()
+    inner = face_samples(BRepBuilderAPI_MakeFace(plane, wire).Face())
+    assert len(inner) > 100
+    assert inner[:, :2].min() >= 4 - 1e-9 and inner[:, :2].max() <= 5 + 1e-9
+    outer = TopoDS_Face()  # (MakeFace would turn the loop around)
+    builder = BRep_Builder()
+    builder.MakeFace(outer, plane, 1e-7)
+    builder.Add(outer, wire.Reversed())
+    outer = face_samples(outer)
+    assert outer[:, :2].min() < 0.1 and outer[:, :2].max() > 9.9
+    inside_square = ((outer[:, :2] > 4 + 1e-9) & (outer[:, :2] < 5 - 1e-9)).all(axis=1)
+    assert not inside_square.any()
+
+
 def test_bspline_face_far_from_the_mesh_is_faceted(monkeypatch):
     import igl_heatseg.cad.build as build_mod
 
-    real = build_mod.face_points
-    monkeypatch.setattr(build_mod, "face_points",
-                        lambda face, d: np.vstack([real(face, d), [[0.0, 0.0, 5.0]]]))
+    real = build_mod.face_samples
+    monkeypatch.setattr(build_mod, "face_samples",
+                        lambda face, **kw: np.vstack([real(face, **kw), [[0.0, 0.0, 5.0]]]))
     V, F, labels, surfs = _wrong_side_plane()
     res = build_brep(V, F, labels, surfs)
     assert [f["index"] for f in res.not_built] == [2]
@@ -1230,7 +1261,7 @@ def test_model_broken_by_a_narrow_face_is_built_again_without_it(monkeypatch):
     real_area = build_mod.face_area
     # segment 2's trimmed face comes out 30 % too large: within a narrow segment's slack only
     monkeypatch.setattr(build_mod, "face_area", lambda f: real_area(f) * (
-        1.3 if np.allclose(build_mod.face_points(f, 0.1).mean(axis=0), centre2, atol=1e-6)
+        1.3 if np.allclose(face_points(f, 0.1).mean(axis=0), centre2, atol=1e-6)
         else 1.0))
     monkeypatch.setattr(build_mod, "_area_slack", lambda loops, ctx, seg_area: 0.5)
     calls = []
@@ -1316,7 +1347,7 @@ def test_faceted_triangle_sewing_closed_up_is_left_out_not_blamed_on_its_neighbo
             return real_invalid(shape, *args)
         P = V[F[thin[len(reported)]]]  # the sewn face with the triangle's corners
         best = min(faces_of(shape), key=lambda f: np.abs(
-            np.sort(build_mod.face_points(f, 1.0), axis=0)[[0, -1]]
+            np.sort(face_points(f, 1.0), axis=0)[[0, -1]]
             - np.sort(P, axis=0)[[0, -1]]).max())
         reported.append(best)
         return [best]

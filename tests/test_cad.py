@@ -1165,10 +1165,14 @@ def test_face_samples_stay_inside_the_trim_and_show_a_wrong_side():
     # a 1 x 1 square trimmed out of a bounded 10 x 10 plane: its samples stay in the square;
     # trimmed to the wrong side of its loop (the complement), they cover the whole plane
     from OCP.BRep import BRep_Builder
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepBuilderAPI import (
+        BRepBuilderAPI_MakeFace,
+        BRepBuilderAPI_MakePolygon,
+        BRepBuilderAPI_Transform,
+    )
     from OCP.Geom import Geom_Plane, Geom_RectangularTrimmedSurface
-    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
-    from OCP.TopoDS import TopoDS_Face
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
+    from OCP.TopoDS import TopoDS, TopoDS_Face
 
     from igl_heatseg.cad.fidelity import face_samples
 
@@ -1179,7 +1183,8 @@ def test_face_samples_stay_inside_the_trim_and_show_a_wrong_side():
         poly.Add(gp_Pnt(x, y, 0))
     poly.Close()
     wire = poly.Wire()
-    inner = face_samples(BRepBuilderAPI_MakeFace(plane, wire).Face())
+    square = BRepBuilderAPI_MakeFace(plane, wire).Face()
+    inner = face_samples(square)
     assert len(inner) > 100
     assert inner[:, :2].min() >= 4 - 1e-9 and inner[:, :2].max() <= 5 + 1e-9
     outer = TopoDS_Face()  # (MakeFace would turn the loop around)
@@ -1190,6 +1195,12 @@ def test_face_samples_stay_inside_the_trim_and_show_a_wrong_side():
     assert outer[:, :2].min() < 0.1 and outer[:, :2].max() > 9.9
     inside_square = ((outer[:, :2] > 4 + 1e-9) & (outer[:, :2] < 5 - 1e-9)).all(axis=1)
     assert not inside_square.any()
+    # a face moved by its location: the samples move with it
+    move = gp_Trsf()
+    move.SetTranslation(gp_Vec(0.0, 0.0, 3.0))
+    moved = BRepBuilderAPI_Transform(square, move, False).Shape()
+    assert not moved.Location().IsIdentity()
+    assert np.allclose(face_samples(TopoDS.Face(moved)), inner + [0.0, 0.0, 3.0])
 
 
 def test_bspline_face_far_from_the_mesh_is_faceted(monkeypatch):

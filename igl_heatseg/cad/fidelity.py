@@ -284,10 +284,10 @@ def face_samples(face, count: int = FACE_SAMPLES, tol: float = 1e-7) -> np.ndarr
     >>> float(P[:, 2].min()), float(P[:, 2].max())
     (0.0, 2.0)
     """
-    surf = BRep_Tool.Surface_s(face)
-    u0, u1, v0, v1 = surf.Bounds()
+    u0, u1, v0, v1 = BRep_Tool.Surface_s(face).Bounds()
     if not max(abs(u0), abs(u1), abs(v0), abs(v1)) < 1e99:  # (OCC's infinite is 2e100)
         u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+    surf = BRepAdaptor_Surface(face, False)  # (placed where the face's location puts it)
     inside = IntTools_FClass2d(face, float(tol))
     out = []
     for u in np.linspace(u0, u1, count).tolist():

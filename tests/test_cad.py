@@ -693,6 +693,52 @@ def test_invalid_segments_names_the_segment_of_an_invalid_face():
                              [0, 1, 2, 3, 4, 5], built) == []
 
 
+def test_invalid_face_made_anew_is_blamed_on_the_built_faces_it_touches():
+    """A face on a surface no segment was built on (ShapeFix split a sliver off, or faces were
+    unified) names the built faces it touches, not no one: no one would facet the whole model
+    (tuning-3 bolt_s6007_irregular_n0.2: a 0.03 sliver next to an invalid torus face)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.BRepTools import BRepTools
+    from OCP.Geom import Geom_Plane
+    from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    import igl_heatseg.cad.build as build_mod
+
+    V, F, labels = box_mesh(2)
+    good = faces_of(build_brep(V, F, labels, box_planes()).shape)
+    plane = Geom_Plane(gp_Pln(gp_Pnt(0, 0, 5), gp_Dir(0, 0, 1)))
+    anew = BRepBuilderAPI_MakeFace(plane, BRepTools.OuterWire_s(good[0]), True).Face()
+    assert not BRepCheck_Analyzer(anew).IsValid()
+
+    def compound(faces):
+        shape, builder = TopoDS_Compound(), BRep_Builder()
+        builder.MakeCompound(shape)
+        for f in faces:
+            builder.Add(shape, f)
+        return shape
+
+    sewn = good[1:]  # the faces handed to the sewing: the new face is none of them
+    opposite = -_centroid(good[0])
+    sides = {i for i, f in enumerate(sewn) if np.linalg.norm(_centroid(f) - opposite) > 0.5}
+    built = [dict(status="built")] * 5
+    for narrow in (True, False):
+        assert build_mod._invalid_segments(compound(sewn + [anew]), sewn, list(range(5)),
+                                           built, narrow=narrow) == sides
+    # faceted sides are not to blame: only the built one it touches
+    status = [dict(status="faceted") if i in sides and i != min(sides) else built[i]
+              for i in range(5)]
+    assert build_mod._invalid_segments(compound(sewn + [anew]), sewn, list(range(5)),
+                                       status) == {min(sides)}
+    # a face made anew that touches no built face: no one to blame
+    loose = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakePolygon(
+        gp_Pnt(0, 0, 1), gp_Pnt(0.5, 0, 1), gp_Pnt(0.5, 0.5, 1), True).Wire(), True).Face()
+    assert build_mod._invalid_segments(compound(sewn + [loose]), sewn, list(range(5)),
+                                       built) is None
+
+
 def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypatch):
     import igl_heatseg.cad.build as build_mod
 

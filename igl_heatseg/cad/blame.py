@@ -136,7 +136,7 @@ def collapsed(f) -> bool:
     return loops != 1
 
 
-def blame(f, owners, status, neighbours, touching=None, narrowed=None):
+def blame(f, owners, status, neighbours, touching=None, narrowed=None, made=None):
     """Built segments accountable for a face of a sewn shape.
 
     Parameters
@@ -154,13 +154,18 @@ def blame(f, owners, status, neighbours, touching=None, narrowed=None):
     narrowed : set, optional
         Gets the segment of a triangle whose blame ``touching`` narrowed (fewer segments than
         without it).
+    made : callable, optional
+        :func:`touching_segments` of the sewn shape, for a face on a surface that no segment
+        was built on (sewing, fixing or unifying made it anew): the built segments whose
+        faces it touches are to blame. Without it such a face is no one's.
 
     Returns
     -------
     set of int or None
         Its own segment when built, else (a triangle of a faceted segment) the built segments
         whose faces it touches (with ``touching``), or when it touches none, the built
-        segments next to its segment; None when no built segment accounts for it.
+        segments next to its segment; for a face made anew, the built segments it touches
+        (with ``made``); None when no built segment accounts for it.
 
     Examples
     --------
@@ -173,8 +178,9 @@ def blame(f, owners, status, neighbours, touching=None, narrowed=None):
     ({0}, {0, 2})
     """
     a = owners.get(BRep_Tool.Surface_s(f))
-    if a is None:
-        return None
+    if a is None:  # (a sliver ShapeFix split off, a face unified from several)
+        return ({b for b in made(f) if status[b]["status"] == "built"} or None) if (
+            made is not None) else None
     if status[a]["status"] == "built":
         return {a}
     near = {b for b in (neighbours or {}).get(a, ()) if status[b]["status"] == "built"}
@@ -264,8 +270,10 @@ def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, n
     -------
     set of int, [] or None
         The segments to facet (empty when only triangles went to ``closed_up``); [] when the
-        shape is valid; None when a face is to blame that no built segment accounts for (a
-        unified face, an isolated faceted patch, the shell itself).
+        shape is valid; None when a face is to blame that no built segment accounts for (an
+        isolated faceted patch, a face made anew that touches no built face, the shell
+        itself). A face made anew (on a surface no segment was built on: a sliver ShapeFix
+        split off, a unified face) is blamed on the built faces it touches.
 
     Examples
     --------
@@ -279,14 +287,15 @@ def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, n
     if not bad_faces:
         return bad_faces
     owners = surface_owners(faces, owner)
-    touching = touching_segments(shape, owners) if narrow else None
+    touching = touching_segments(shape, owners)
     bad: set = set()
     for f in bad_faces:
         row = droppable(BRep_Tool.Surface_s(f)) if droppable is not None else None
         if row is not None and closed_up is not None and collapsed(f):
             closed_up.add(row)
             continue
-        who = blame(f, owners, status, neighbours, touching, narrowed)
+        who = blame(f, owners, status, neighbours, touching if narrow else None, narrowed,
+                    made=touching)
         if who is None:
             return None
         bad |= who

@@ -366,6 +366,24 @@ def test_benchmark_sets_split_by_family_and_seed():
         mb.plan_set("test", 3)
 
 
+def test_benchmark_set_from_another_first_seed():
+    """``--first-seed`` (tuning-2 and -3 at 5000 and 6000): the same families and variants in
+    the same order, other seeds, a manifest that says so; the names match the parts the
+    sessions generated with a copy of the tool (tuning-3: bolt_s6007_irregular_n0.2)."""
+    import make_benchmark_sets as mb
+
+    default, third = mb.plan_set("tuning", 40), mb.plan_set("tuning", 40, seed0=6000)
+    assert [e["seed"] for e in third] == list(range(6000, 6040))
+    assert [e["family"] for e in third] == [e["family"] for e in default]
+    assert [(e["tessellation"], e["noise"]) for e in third] == [
+        (e["tessellation"], e["noise"]) for e in default]
+    assert mb.part_name(third[7]) == "bolt_s6007_irregular_n0.2"
+    assert mb.split_description("tuning", 6000)["tuning_seeds_from"] == 6000
+    assert mb.split_description("tuning", 6000)["validation_seeds_from"] == mb.VALIDATION_SEED0
+    with pytest.raises(ValueError):
+        mb.plan_set("tuning", 3, seed0=-1)
+
+
 def test_benchmark_set_writes_parts_and_manifest(tmp_path, monkeypatch):
     import json
 

@@ -25,6 +25,11 @@ Usage::
 
     python tools/make_benchmark_sets.py --out /work/parts            # both sets, 40 parts each
     python tools/make_benchmark_sets.py --out /tmp/sets --per-set 8 --sets tuning
+    python tools/make_benchmark_sets.py --out /work/parts_t3 --sets tuning --first-seed 6000
+
+``--first-seed`` makes further sets of the same split: another tuning set (seeds 5000 and
+6000 on, tuning-2 and tuning-3) or a fresh validation set (seeds 4000 on), each never
+meeting the default ranges.
 
 Generated meshes are data: keep them out of the repository.
 """
@@ -91,7 +96,7 @@ def set_families(name: str) -> tuple[str, ...]:
     raise ValueError(f"set must be 'tuning' or 'validation', got {name!r}")
 
 
-def plan_set(name: str, n_parts: int) -> list[dict]:
+def plan_set(name: str, n_parts: int, seed0: int | None = None) -> list[dict]:
     """The parts of one set: family, seed and variant of each, deterministic.
 
     Parameters
@@ -99,6 +104,9 @@ def plan_set(name: str, n_parts: int) -> list[dict]:
     name : {"tuning", "validation"}
     n_parts : int
         Number of parts; families are cycled (validation starts with the held-out ones).
+    seed0 : int, optional
+        First seed (parts take consecutive seeds); TUNING_SEED0 or VALIDATION_SEED0 by
+        default.
 
     Returns
     -------
@@ -109,7 +117,10 @@ def plan_set(name: str, n_parts: int) -> list[dict]:
     if n_parts < 1:
         raise ValueError(f"n_parts must be >= 1, got {n_parts}")
     families = set_families(name)
-    seed0 = TUNING_SEED0 if name == "tuning" else VALIDATION_SEED0
+    if seed0 is None:
+        seed0 = TUNING_SEED0 if name == "tuning" else VALIDATION_SEED0
+    if seed0 < 0:
+        raise ValueError(f"seed0 must be >= 0, got {seed0}")
     plan = []
     for i in range(n_parts):
         seed = seed0 + i
@@ -153,20 +164,23 @@ def build_part(entry: dict) -> mp.Part:
     )
 
 
-def split_description() -> dict:
-    """The split rule, stored in every manifest."""
+def split_description(name: str | None = None, seed0: int | None = None) -> dict:
+    """The split rule, stored in every manifest (with set ``name`` starting at ``seed0``)."""
+    firsts = {"tuning": TUNING_SEED0, "validation": VALIDATION_SEED0}
+    if name is not None and seed0 is not None:
+        firsts[name] = seed0
     return dict(
         validation_only_families=list(VALIDATION_ONLY),
         shared_families=list(TUNING_FAMILIES),
-        tuning_seeds_from=TUNING_SEED0,
-        validation_seeds_from=VALIDATION_SEED0,
+        tuning_seeds_from=firsts["tuning"],
+        validation_seeds_from=firsts["validation"],
         tessellations=list(TESSELLATIONS),
         noise_levels=list(NOISE_LEVELS),
         noise_unit="mean edge length, along vertex normals",
     )
 
 
-def write_set(out: Path, name: str, n_parts: int) -> dict:
+def write_set(out: Path, name: str, n_parts: int, seed0: int | None = None) -> dict:
     """Generate one set into ``out/name`` and write its ``manifest.json``.
 
     Parameters
@@ -175,6 +189,8 @@ def write_set(out: Path, name: str, n_parts: int) -> dict:
         Parent directory (created if missing).
     name : {"tuning", "validation"}
     n_parts : int
+    seed0 : int, optional
+        First seed (:func:`plan_set`).
 
     Returns
     -------
@@ -185,7 +201,7 @@ def write_set(out: Path, name: str, n_parts: int) -> dict:
     folder.mkdir(parents=True, exist_ok=True)
     entries = []
     t_set = time.perf_counter()
-    for k, entry in enumerate(plan_set(name, n_parts)):
+    for k, entry in enumerate(plan_set(name, n_parts, seed0)):
         t0 = time.perf_counter()
         part = build_part(entry)
         stem = part_name(entry)
@@ -208,7 +224,7 @@ def write_set(out: Path, name: str, n_parts: int) -> dict:
         )
     manifest = dict(
         set=name,
-        split=split_description(),
+        split=split_description(name, seed0),
         families=sorted({e["family"] for e in entries}),
         seeds=[e["seed"] for e in entries],
         seconds=round(time.perf_counter() - t_set, 1),
@@ -226,11 +242,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--sets", nargs="+", choices=("tuning", "validation"), default=["tuning", "validation"]
     )
+    ap.add_argument(
+        "--first-seed", type=int, default=None,
+        help="first seed of the set(s) written (default: %d for tuning, %d for validation); "
+        "e.g. 6000 for another tuning set" % (TUNING_SEED0, VALIDATION_SEED0),
+    )
     args = ap.parse_args(argv)
     if args.per_set < 1:
         ap.error("--per-set must be >= 1")
+    if args.first_seed is not None and args.first_seed < 0:
+        ap.error("--first-seed must be >= 0")
     for name in args.sets:
-        m = write_set(Path(args.out), name, args.per_set)
+        m = write_set(Path(args.out), name, args.per_set, args.first_seed)
         print(
             f"{name}: {len(m['parts'])} parts, {len(m['families'])} families, "
             f"{m['seconds']:.0f} s -> {Path(args.out) / name / 'manifest.json'}"

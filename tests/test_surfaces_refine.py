@@ -283,3 +283,38 @@ def test_a_smooth_join_fitted_worse_than_a_merge_accepts_is_split(monkeypatch):
     assert purity > 0.9
     monkeypatch.setattr(R, "OVERFIT_RATIO", np.inf)  # without the test: one torus
     assert [s.kind for s in refine_segmentation(V, F, one).surfaces] == ["torus"]
+
+
+def test_merging_finds_each_segments_measured_vertices_once(monkeypatch):
+    """merge_segments measures a segment against every neighbour's surface after each merge;
+    the vertices measured are found once per faces array, with the merges unchanged."""
+    from igl_heatseg.surfaces import merge, segment_fit
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    V, F = capped_cylinder(facets=12)
+    side = np.arange(len(F)) < 2 * 6 * 12
+    labels0 = np.where(side, (np.arange(len(F)) // 2) % 12,
+                       12 + (np.arange(len(F)) - 2 * 6 * 12) % 2)
+    tol = 0.02
+
+    def run():
+        labels = labels0.copy()
+        fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol) for k in range(14)}
+        n = merge.merge_segments(V, F, labels, tol, fits)
+        return n, labels, sorted((k, s.kind) for k, s in fits.items())
+
+    found, measures = [], []
+    real_pre, real_rms = merge.precheck_vertices, merge.rms_to
+    monkeypatch.setattr(merge, "precheck_vertices",
+                        lambda F_, f: found.append(f) or real_pre(F_, f))
+    monkeypatch.setattr(merge, "rms_to", lambda *a, **k: measures.append(1) or real_rms(*a, **k))
+    cached = run()
+    assert cached[0] == 11 and [k for _, k in cached[2]] == ["cylinder", "plane", "plane"]
+    assert len({id(f) for f in found}) == len(found)  # each array's vertices found once
+    assert len(measures) > 2 * len(found)
+    # the same merges when every measure finds its vertices itself
+    monkeypatch.setattr(merge, "rms_to", lambda V_, F_, f, s, verts=None:
+                        segment_fit.rms_to(V_, F_, f, s))
+    plain = run()
+    assert plain[0] == cached[0] and np.array_equal(plain[1], cached[1])
+    assert plain[2] == cached[2]

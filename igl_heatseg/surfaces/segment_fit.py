@@ -23,6 +23,7 @@ __all__ = [
     "fit_faces",
     "fit_segments",
     "normals_agree",
+    "precheck_vertices",
     "rms_to",
     "explains",
     "corner_rms",
@@ -264,7 +265,31 @@ def _trimmed_fit(V, F, faces, tol, kinds, W, free: Surface, samples) -> Surface 
     return None if on is None else refit(faces[on])
 
 
-def rms_to(V, F, faces, s: Surface) -> float:
+def precheck_vertices(F, faces) -> np.ndarray:
+    """The vertices :func:`rms_to` measures: of the faces' ``k`` distinct vertices (ascending),
+    every ``max(1, k // PRECHECK_SAMPLES)``-th.
+
+    Parameters
+    ----------
+    F : (m, 3) int64
+    faces : (f,) int64
+
+    Returns
+    -------
+    (about PRECHECK_SAMPLES or fewer,) int64
+        Vertex ids.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> precheck_vertices(np.array([[0, 1, 2], [2, 1, 3]]), [1, 0]).tolist()
+    [0, 1, 2, 3]
+    """
+    verts = np.unique(F[faces])
+    return verts[:: max(1, len(verts) // PRECHECK_SAMPLES)]
+
+
+def rms_to(V, F, faces, s: Surface, verts=None) -> float:
     """RMS distance of (a sample of about PRECHECK_SAMPLES of) the faces' vertices to ``s``.
 
     Parameters
@@ -273,6 +298,9 @@ def rms_to(V, F, faces, s: Surface) -> float:
     F : (m, 3) int64
     faces : (f,) int64
     s : Surface
+    verts : (k,) int64, optional
+        :func:`precheck_vertices` of ``faces``, when the caller keeps them (the same faces
+        measured against many surfaces).
 
     Returns
     -------
@@ -289,8 +317,8 @@ def rms_to(V, F, faces, s: Surface) -> float:
     """
     if not s.is_analytic:
         return math.inf
-    verts = np.unique(F[faces])
-    verts = verts[:: max(1, len(verts) // PRECHECK_SAMPLES)]
+    if verts is None:
+        verts = precheck_vertices(F, faces)
     d = s.distance(V[verts])
     return float(np.sqrt((d * d).mean()))
 

@@ -28,8 +28,8 @@ Usage::
     python tools/make_benchmark_sets.py --out /work/parts_t3 --sets tuning --first-seed 6000
 
 ``--first-seed`` makes further sets of the same split: another tuning set (seeds 5000 and
-6000 on, tuning-2 and tuning-3) or a fresh validation set (seeds 4000 on), each never
-meeting the default ranges.
+6000 on, tuning-2 and tuning-3) or a fresh validation set (seeds 4000 on). Choose a range
+that meets no other set's (the tool does not check).
 
 Generated meshes are data: keep them out of the repository.
 """

@@ -179,8 +179,9 @@ def blame(f, owners, status, neighbours, touching=None, narrowed=None, made=None
     """
     a = owners.get(BRep_Tool.Surface_s(f))
     if a is None:  # (a sliver ShapeFix split off, a face unified from several)
-        return ({b for b in made(f) if status[b]["status"] == "built"} or None) if (
-            made is not None) else None
+        if made is None:
+            return None
+        return {b for b in made(f) if status[b]["status"] == "built"} or None
     if status[a]["status"] == "built":
         return {a}
     near = {b for b in (neighbours or {}).get(a, ()) if status[b]["status"] == "built"}

@@ -5,7 +5,10 @@ validation set's, beside mesh2cad).
 Per part, from ``OUT/NAME/report.json`` and ``model.step``: segments and faceted segments,
 a valid closed solid (BRepCheck, a solid, no free edge), the two-sided Hausdorff distance to
 the mesh (the report's) and to the part (to the noise-free mesh of a noisy part, rebuilt from
-the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error, the seconds, the
+the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error to the mesh and to
+the part (the noise-free mesh's volume: noise is not volume-neutral, a noisy mesh's volume is
+0.01-0.4 % off its part's on the tuning parts; a coarse tessellation's volume is its chords'),
+the seconds, the
 border faces the build moved to a neighbouring segment, the B-Rep's faces (a faceted segment
 adds one per triangle) and the faceted triangles left out because sewing closed them up.
 Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
@@ -48,6 +51,10 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
             cad = json.loads((d / "report.json").read_text())["cad"]
             scores[d.name].update(brep_faces=cad["fidelity"]["faces"], dropped=sum(
                 f.get("dropped", 0) for f in cad["faces"]))
+        if d.name in scores and "vol_part" not in scores[d.name] and d.name in manifest:
+            fid = json.loads((d / "report.json").read_text())["cad"]["fidelity"]
+            scores[d.name]["vol_part"] = _volume_to_part(fid, manifest[d.name], cache)
+            path.write_text(json.dumps(scores, indent=1) + "\n")
         if d.name in scores or d.name not in manifest:
             continue
         rep = json.loads((d / "report.json").read_text())
@@ -70,9 +77,27 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
             ref = load_mesh(clean_mesh(entry, cache))
             row["to_part"] = brep_fidelity(read_step(d / "model.step"), ref.V,
                                            ref.F)["hausdorff_rel"]
+        row["vol_part"] = _volume_to_part(fid, entry, cache)
         scores[d.name] = row
         path.write_text(json.dumps(scores, indent=1) + "\n")
     return scores
+
+
+def _volume_to_part(fid: dict, entry: dict, cache: Path) -> float | None:
+    """Relative volume error of a closed B-Rep to its part: to the noise-free mesh's volume
+    for a noisy part, else the report's error to the mesh (None when not closed)."""
+    if fid.get("volume") is None:
+        return None
+    if not entry["noise"]:
+        return fid["volume_rel_error"]
+    from bench_cad import clean_mesh
+
+    from igl_heatseg.cad.fidelity import mesh_volume
+    from igl_heatseg.io import load_mesh
+
+    ref = load_mesh(clean_mesh(entry, cache))
+    part = mesh_volume(ref.V, ref.F)
+    return abs(fid["volume"] - part) / abs(part)
 
 
 def _pct(x) -> str:
@@ -98,6 +123,8 @@ def summary(scores: dict) -> dict:
             "Hausdorff <= 0.5 % to the mesh": sum(_ok(r["hausdorff"]) for r in scores.values()),
             "Hausdorff <= 0.5 % to the part": sum(_ok(r["to_part"]) for r in scores.values()),
             "volume error <= 0.5 %": sum(_ok(r["volume"]) for r in scores.values()),
+            "volume error <= 0.5 % to the part": sum(_ok(r.get("vol_part"))
+                                                    for r in scores.values()),
             "seconds (sum)": round(sum(r["seconds"] for r in scores.values()), 1),
             "parts over 30 s": sum(r["seconds"] > 30 for r in scores.values()),
             "border faces moved (parts)": f"{sum(moved)} ({sum(m > 0 for m in moved)})",
@@ -112,6 +139,7 @@ def _cell(r: dict | None) -> str:
         return "missing"
     return (f"faceted {r['faceted']:3d}/{r['segments']:3d} {'solid' if r['solid'] else 'no solid'}"
             f" H {_pct(r['hausdorff'])} to part {_pct(r['to_part'])} vol {_pct(r['volume'])}"
+            f" to part {_pct(r.get('vol_part'))}"
             f" faces {r.get('brep_faces')} {r['seconds']:.0f} s")
 
 
@@ -124,7 +152,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     cache = args.clean or args.set.parent / "clean"
     runs = [score_run(args.set, out, cache) for out in args.runs[:2]]
-    keys = ("faceted", "solid", "hausdorff", "to_part", "volume", "brep_faces")
+    keys = ("faceted", "solid", "hausdorff", "to_part", "volume", "vol_part", "brep_faces")
     for name in sorted(set().union(*runs)):
         rows = [run.get(name) for run in runs]
         changed = len(rows) == 2 and (None in rows or any(rows[0][k] != rows[1][k]

@@ -1511,3 +1511,44 @@ def test_model_broken_by_moved_border_faces_is_built_again_with_the_given_border
     assert not res.faceted_model and res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert res.border_faces_moved.shape == (0, 3)
     assert res.faces[0]["reason"].startswith("surface deviates")
+
+
+def _shared_edge_points(shape, n: int = 50) -> np.ndarray:
+    """(n, 3) points along the one edge of ``shape`` that two faces share."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+
+    amap = blame._AncestorMap()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, amap)
+    shared = [TopoDS.Edge(amap.FindKey(i)) for i in range(1, amap.Extent() + 1)
+              if amap.FindFromIndex(i).Extent() == 2]
+    assert len(shared) == 1
+    c = BRepAdaptor_Curve(shared[0])
+    return np.array([(lambda p: (p.X(), p.Y(), p.Z()))(c.Value(t))
+                     for t in np.linspace(c.FirstParameter(), c.LastParameter(), n)])
+
+
+def test_edge_of_a_nearly_tangent_join_runs_between_the_surfaces_not_along_the_noise():
+    """A plane running tangentially into a cylinder, with noise: their fits leave a gap at the
+    join (here the cylinder's axis 0.01 too high), so the edge samples moved onto both
+    surfaces end 0.005 from each, above the curve tolerance. Those samples used to stay at the
+    noisy mesh points (an edge 0.77 units off a flange with noise 0.1 of an edge); they now
+    keep their move, which is nearer to both surfaces than the mesh was."""
+    from meshes import plane_into_cylinder
+
+    noise, R = 0.02, 4.0
+    V, F, S, exact = plane_into_cylinder(noise, seed=1)
+    labels = (S > 0).astype(np.int64)
+    cyl = Surface("cylinder", {"point": np.array([0.0, 0, R + 0.01]),
+                               "axis": np.array([0.0, 1, 0]), "radius": R})
+    res = build_brep(V, F, labels, [exact[0], cyl])
+    assert [f["status"] for f in res.faces] == ["built", "built"]
+    P = _shared_edge_points(res.shape)
+    assert np.abs(P[:, 0]).max() < 1.0  # at the join (the tangent line x = 0)
+    # within the gap of both surfaces (0.0052 measured), not at the noise (the edge through
+    # samples left at mesh points: 0.075)
+    assert np.abs(P[:, 2]).max() < 0.01
+    assert np.abs(cyl.distance(P)).max() < 0.01
+

@@ -133,8 +133,8 @@ def _place_vertices(V, graph, projs, ctx):
         X = V[v]
         if ps:
             Y, res = geometry.onto_surfaces(V[v][None], ps)
-            if _kept(V[v][None], Y, res, ps, ctx["curve_tol"],
-                     _move_limit(ctx, graph.vertex_sides[v]))[0]:
+            if res[0] <= ctx["curve_tol"] and \
+                    np.linalg.norm(Y[0] - V[v]) <= _move_limit(ctx, graph.vertex_sides[v]):
                 X = Y[0]
             else:
                 logger.debug("vertex %d: surfaces ill-conditioned (res %.3g), mesh vertex", v,
@@ -145,34 +145,6 @@ def _place_vertices(V, graph, projs, ctx):
         if a != b and np.linalg.norm(pos[a] - pos[b]) <= ctx["curve_tol"]:
             pos[a], pos[b] = V[a], V[b]
     return pos
-
-
-def _kept(P, X, res, projs, curve_tol: float, limit: float) -> np.ndarray:
-    """(p,) bool: the points ``P`` (p, 3) keep their move onto the surfaces ``projs`` (to
-    ``X``, ending ``res`` from the farthest of them) when it is no longer than ``limit`` and
-    ends on the surfaces within ``curve_tol``; or, on analytic surfaces, when it ends nearer
-    to all of them than ``P`` was and is no longer than twice ``P``'s distance from them.
-
-    Two nearly tangent surfaces (a fillet running into a cylinder) leave a residual above the
-    curve tolerance, and the noisy mesh point is farther still from both: on a flange with
-    noise 0.1 of an edge, an edge left on such mesh points ran 0.77 units (0.6 % of the
-    diagonal) off the part where the moved points were 0.06 off both surfaces. A B-spline's
-    projector clamps to its domain, so a point nearer to it need not be nearer to the part
-    (a countersunk plate's bottom plane, built as a B-spline: the points of a chamfer's edge
-    moved up to 1.3 units, and with the moves bounded its trimmed face still failed
-    BRepCheck); and a move much longer than the point's distance from the surfaces slid
-    along them rather than onto them."""
-    ok = np.linalg.norm(X - P, axis=1) <= limit
-    loose = ok & (res > curve_tol)
-    if loose.any():
-        if any(pr.surface is None for pr in projs):
-            ok[loose] = False
-        else:
-            start = np.abs(np.stack([pr.residual(P[loose])[0] for pr in projs], axis=1))
-            start = start.max(axis=1)
-            ok[loose] = (res[loose] < start) & \
-                (np.linalg.norm(X[loose] - P[loose], axis=1) <= 2.0 * start)
-    return ok
 
 
 def _move_limit(ctx, sides) -> float:
@@ -221,7 +193,8 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
         lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
         if ps and len(P) > 2:
             X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
-            ok = _kept(P[lo:len(P) - lo], X, res, ps, ctx["curve_tol"], limit)
+            ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
+                                              <= limit)
             P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
         cache[key] = P, orig, R is not None
     P, orig, restarted = cache[key]

@@ -1511,3 +1511,23 @@ def test_model_broken_by_moved_border_faces_is_built_again_with_the_given_border
     assert not res.faceted_model and res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert res.border_faces_moved.shape == (0, 3)
     assert res.faces[0]["reason"].startswith("surface deviates")
+
+
+def test_a_stray_triangulation_node_is_put_back_on_its_surface():
+    """OCC's mesher left a node of a fresh plate's cylinder face at the origin, 42.5 units off
+    the face (its (u, v) on it), and the Hausdorff distance read 5.67 % of the diagonal instead
+    of 0.81 %. A node far from its surface at its own (u, v) is put there."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.TopLoc import TopLoc_Location
+
+    from igl_heatseg.cad.fidelity import mesh_faces
+
+    V, F, _ = box_mesh(4)
+    box = BRepPrimAPI_MakeBox(gp_Pnt(-1.0, -1.0, -1.0), 2.0, 2.0, 2.0).Shape()
+    mesh_faces(box, 1e-4)  # finer than brep_fidelity asks: the triangulation is kept
+    face = faces_of(box)[0]
+    tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
+    tri.SetNode(1, gp_Pnt(5.0, 5.0, 5.0))  # what the mesher left
+    assert brep_fidelity(box, V, F)["hausdorff"] < 1e-9  # (6.93 with the node left)

@@ -78,10 +78,11 @@ TESSELLATION_SHORT = 0.01
 #: 0.08 s against 10 s to mesh that face).
 FACE_SAMPLES = 64
 
-#: A triangulation node farther than this many deflections (or edge tolerances) from its
-#: face's surface at the node's own (u, v) is a mesher fault and is put on the surface: a
-#: node of a fresh plate's cylinder face sat at the origin (its (u, v) on the face), 42.5
-#: units off, and made the Hausdorff distance 5.67 % of the diagonal instead of 0.81 %.
+#: A triangulation node outside its face's box and farther than this many deflections (or
+#: edge or vertex tolerances, when larger) from it and from the face's surface at the node's
+#: own (u, v) is a mesher fault and is put on the surface: a node of a fresh plate's cylinder
+#: face sat at the origin (its (u, v) on the face), 42.5 units off, and made the Hausdorff
+#: distance 5.67 % of the diagonal instead of 0.81 %.
 STRAY_NODE_FACTOR = 4.0
 
 #: Angular deflection (radians) of the measurement tessellation: loose, the linear deflection
@@ -351,23 +352,33 @@ def _face_triangles(face, deflection: float):
     P = np.array([[q.X(), q.Y(), q.Z()] for q in
                   (tri.Node(i).Transformed(trsf) for i in range(1, tri.NbNodes() + 1))])
     if tri.HasUVNodes():
-        surf = BRepAdaptor_Surface(face)
-        S = np.array([[q.X(), q.Y(), q.Z()] for q in
-                      (surf.Value(uv.X(), uv.Y()) for uv in
-                       (tri.UVNode(i) for i in range(1, tri.NbNodes() + 1)))])
-        margin = STRAY_NODE_FACTOR * max(deflection, _edge_tolerance(face),
-                                         _vertex_tolerance(face))
-        box = Bnd_Box()
-        BRepBndLib.Add_s(face, box, False)  # the geometry's box, not the triangulation's
-        lo, hi = box.CornerMin(), box.CornerMax()
-        outside = np.any((P < np.array([lo.X(), lo.Y(), lo.Z()]) - margin)
-                         | (P > np.array([hi.X(), hi.Y(), hi.Z()]) + margin), axis=1)
-        stray = outside & (np.linalg.norm(P - S, axis=1) > margin)
-        if stray.any():
-            logger.debug("%d stray triangulation node(s) put on the surface", stray.sum())
-            P[stray] = S[stray]
+        P = _mend_stray_nodes(face, tri, P, deflection)
     T = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
     return P, (T[:, ::-1] if face.Orientation() == TopAbs_REVERSED else T)
+
+
+def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray:
+    """``P`` (p, 3), the nodes of ``face``'s triangulation ``tri``, with the strays of
+    :func:`_face_triangles` put on the surface at their (u, v)."""
+    box = Bnd_Box()
+    BRepBndLib.Add_s(face, box, False)  # the geometry's box, not the triangulation's
+    lo, hi = box.CornerMin(), box.CornerMax()
+    lo, hi = np.array([lo.X(), lo.Y(), lo.Z()]), np.array([hi.X(), hi.Y(), hi.Z()])
+    margin = STRAY_NODE_FACTOR * deflection
+    out = np.flatnonzero(np.any((P < lo - margin) | (P > hi + margin), axis=1))
+    if len(out) == 0:
+        return P
+    margin = STRAY_NODE_FACTOR * max(deflection, _edge_tolerance(face), _vertex_tolerance(face))
+    surf = BRepAdaptor_Surface(face)
+    S = np.array([(lambda q: (q.X(), q.Y(), q.Z()))(surf.Value(uv.X(), uv.Y()))
+                  for uv in (tri.UVNode(int(i) + 1) for i in out)])
+    stray = np.any((P[out] < lo - margin) | (P[out] > hi + margin), axis=1) & \
+        (np.linalg.norm(P[out] - S, axis=1) > margin)
+    if stray.any():
+        logger.debug("%d stray triangulation node(s) put on the surface", stray.sum())
+        P = P.copy()
+        P[out[stray]] = S[stray]
+    return P
 
 
 def _triangles(shape, deflection: float):

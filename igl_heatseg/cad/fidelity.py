@@ -182,20 +182,13 @@ def _triangulation(face, deflection: float):
     return (tri, loc) if tri is not None and tri.NbTriangles() > 0 else (None, loc)
 
 
-def _edge_tolerance(face) -> float:
-    """The largest tolerance of a face's edges (sewing raises it to the gaps it closed)."""
-    t, ex = 0.0, TopExp_Explorer(face, TopAbs_EDGE)
+def _edge_tolerance(face, kind=TopAbs_EDGE) -> float:
+    """The largest tolerance of a face's edges (sewing raises it to the gaps it closed), or
+    of its vertices with ``kind=TopAbs_VERTEX``."""
+    cast = TopoDS.Edge if kind == TopAbs_EDGE else TopoDS.Vertex
+    t, ex = 0.0, TopExp_Explorer(face, kind)
     while ex.More():
-        t = max(t, BRep_Tool.Tolerance_s(TopoDS.Edge(ex.Current())))
-        ex.Next()
-    return t
-
-
-def _vertex_tolerance(face) -> float:
-    """The largest tolerance of a face's vertices."""
-    t, ex = 0.0, TopExp_Explorer(face, TopAbs_VERTEX)
-    while ex.More():
-        t = max(t, BRep_Tool.Tolerance_s(TopoDS.Vertex(ex.Current())))
+        t = max(t, BRep_Tool.Tolerance_s(cast(ex.Current())))
         ex.Next()
     return t
 
@@ -368,7 +361,8 @@ def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray
     out = np.flatnonzero(np.any((P < lo - margin) | (P > hi + margin), axis=1))
     if len(out) == 0:
         return P
-    margin = STRAY_NODE_FACTOR * max(deflection, _edge_tolerance(face), _vertex_tolerance(face))
+    margin = STRAY_NODE_FACTOR * max(deflection, _edge_tolerance(face),
+                                     _edge_tolerance(face, TopAbs_VERTEX))
     surf = BRepAdaptor_Surface(face)
     S = np.array([(lambda q: (q.X(), q.Y(), q.Z()))(surf.Value(uv.X(), uv.Y()))
                   for uv in (tri.UVNode(int(i) + 1) for i in out)])

@@ -355,6 +355,8 @@ def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray
     :func:`_face_triangles` put on the surface at their (u, v)."""
     box = Bnd_Box()
     BRepBndLib.Add_s(face, box, False)  # the geometry's box, not the triangulation's
+    if box.IsVoid():
+        return P
     lo, hi = box.CornerMin(), box.CornerMax()
     lo, hi = np.array([lo.X(), lo.Y(), lo.Z()]), np.array([hi.X(), hi.Y(), hi.Z()])
     margin = STRAY_NODE_FACTOR * deflection

@@ -182,7 +182,7 @@ def _triangulation(face, deflection: float):
     return (tri, loc) if tri is not None and tri.NbTriangles() > 0 else (None, loc)
 
 
-def _edge_tolerance(face, kind=TopAbs_EDGE) -> float:
+def _tolerance(face, kind=TopAbs_EDGE) -> float:
     """The largest tolerance of a face's edges (sewing raises it to the gaps it closed), or
     of its vertices with ``kind=TopAbs_VERTEX``."""
     cast = TopoDS.Edge if kind == TopAbs_EDGE else TopoDS.Vertex
@@ -225,7 +225,7 @@ def _mesh_each(shape, deflection: float) -> list:
     """:func:`mesh_faces`, face by face: [(face, the deflection it was meshed with)]."""
     out = []
     for face in faces_of(shape):
-        d = max(deflection, _edge_tolerance(face))
+        d = max(deflection, _tolerance(face))
         BRepMesh_IncrementalMesh(face, d, False, MESH_ANGLE, False)
         out.append((face, d))
     return out
@@ -353,18 +353,16 @@ def _face_triangles(face, deflection: float):
 def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray:
     """``P`` (p, 3), the nodes of ``face``'s triangulation ``tri``, with the strays of
     :func:`_face_triangles` put on the surface at their (u, v)."""
-    box = Bnd_Box()
-    BRepBndLib.Add_s(face, box, False)  # the geometry's box, not the triangulation's
-    if box.IsVoid():
+    bounds = _bounds(face, triangulation=False)  # the geometry's box, not the triangulation's
+    if bounds is None:
         return P
-    lo, hi = box.CornerMin(), box.CornerMax()
-    lo, hi = np.array([lo.X(), lo.Y(), lo.Z()]), np.array([hi.X(), hi.Y(), hi.Z()])
+    lo, hi = bounds
     margin = STRAY_NODE_FACTOR * deflection
     out = np.flatnonzero(np.any((P < lo - margin) | (P > hi + margin), axis=1))
     if len(out) == 0:
         return P
-    margin = STRAY_NODE_FACTOR * max(deflection, _edge_tolerance(face),
-                                     _edge_tolerance(face, TopAbs_VERTEX))
+    margin = STRAY_NODE_FACTOR * max(deflection, _tolerance(face),
+                                     _tolerance(face, TopAbs_VERTEX))
     surf = BRepAdaptor_Surface(face)
     S = np.array([(lambda q: (q.X(), q.Y(), q.Z()))(surf.Value(uv.X(), uv.Y()))
                   for uv in (tri.UVNode(int(i) + 1) for i in out)])
@@ -558,9 +556,13 @@ def _boxes_near(boxes: np.ndarray, p: np.ndarray, r: float) -> np.ndarray:
     return np.flatnonzero(np.all((p >= boxes[:, 0] - r) & (p <= boxes[:, 1] + r), axis=1))
 
 
-def _bounds(face) -> np.ndarray:
+def _bounds(face, triangulation: bool = True) -> np.ndarray | None:
+    """(2, 3) lowest and highest corner of a face's box (with its triangulation, or of its
+    geometry alone); None when the box is void."""
     box = Bnd_Box()
-    BRepBndLib.Add_s(face, box)
+    BRepBndLib.Add_s(face, box, triangulation)
+    if box.IsVoid():
+        return None
     lo, hi = box.CornerMin(), box.CornerMax()
     return np.array([[lo.X(), lo.Y(), lo.Z()], [hi.X(), hi.Y(), hi.Z()]])
 

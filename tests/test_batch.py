@@ -215,6 +215,30 @@ def test_job_outside_dask_writes_what_the_command_writes(meshes, tmp_path):
     assert rec["charts"] == rec["bijective"] and rec["fallback"] is not None
 
 
+def test_a_cad_job_gets_a_share_of_its_timeout_as_its_time_limit(monkeypatch, tmp_path):
+    """The job server gives a kind that takes a time limit (cad) TIME_LIMIT_SHARE of the
+    timeout, unless the batch gives one or has no timeout; other kinds get none."""
+    from dataclasses import replace
+
+    from igl_heatseg.batch import jobs
+    from igl_heatseg.batch.server import TIME_LIMIT_SHARE, child_job
+
+    seen = []
+    for name in ("cad", "segment"):
+        fake = replace(jobs.JOB_KINDS[name], summarize=lambda report: {},
+                       run=lambda mesh, out, **opts: seen.append(opts) or {})
+        monkeypatch.setitem(jobs.JOB_KINDS, name, fake)
+    req = {"kind": "cad", "mesh": "m.off", "out": str(tmp_path / "o"),
+           "options": {"mode": "robust", "energy": "hlle"}}
+    for extra in ({"timeout": 600}, {"timeout": None},
+                  {"timeout": 600, "options": {"time_limit": 60}},
+                  {"timeout": 600, "kind": "segment"}):
+        assert child_job(dict(req, **extra))["status"] == "done"
+    assert TIME_LIMIT_SHARE == 0.5
+    assert seen == [{"mode": "robust", "time_limit": 300.0}, {"mode": "robust"},
+                    {"time_limit": 60}, {"mode": "robust"}]
+
+
 def test_timeout_and_memory_limit_in_the_job(meshes, tmp_path):
     root, _ = meshes
     mesh = str(root / "spheres" / "s3.off")

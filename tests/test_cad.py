@@ -555,6 +555,13 @@ def test_a_model_of_two_parts_that_stays_invalid_is_built_part_by_part(monkeypat
     fid = res.fidelity
     assert fid["valid"] and fid["solids"] == 2 and fid["faces"] == 12
     assert fid["volume"] == pytest.approx(16.0, rel=1e-9)
+    # the time limit: past it, no part-by-part build; before it, the parts share what is left
+    two = (V2, F2, np.r_[labels, labels + 6], box_planes() + moved)
+    res = build_brep(*two, time_limit=0.0)
+    assert res.faceted_model and res.time_limit["skipped"] == ["the part-by-part build"]
+    res = build_brep(*two, time_limit=3600.0)
+    assert not res.faceted_model and "part by part" in res.message
+    assert res.time_limit == {"seconds": 3600.0, "reached": False, "skipped": []}
     # a mesh of one part that stays invalid: the faceted model, as before
     monkeypatch.setattr(build_mod, "_sewn_model", lambda V, F, *a, **k: (
         *real(V, F, *a, **k)[:3], True, "forced", False))
@@ -1004,6 +1011,54 @@ def test_model_still_invalid_after_the_rebuilds_is_written_faceted(monkeypatch):
     assert len(calls) == build_mod.MAX_REBUILDS + 1
     assert res.faceted_model and "BRepCheck" in res.message
     assert res.fidelity["valid"] and res.fidelity["faces"] == len(F)
+
+
+def test_time_limit_starts_no_rebuild_and_writes_an_invalid_model_faceted(monkeypatch):
+    """Past the time limit an invalid sewn model is not rebuilt (its invalid face faceted) but
+    written faceted whole, with the reason; a limit not reached changes nothing."""
+    import igl_heatseg.cad.build as build_mod
+
+    real, calls = build_mod._invalid_segments, []
+
+    def first_side_invalid(shape, faces, *args):
+        calls.append(len(faces))
+        return {2} if len(calls) == 1 else real(shape, faces, *args)
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", first_side_invalid)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes(), time_limit=0.0)
+    assert calls == [6]  # the first build only
+    assert res.faceted_model and res.fidelity["valid"] and res.fidelity["faces"] == len(F)
+    assert "time limit reached: skipped rebuild 1 (segments [2] faceted)" in res.message
+    assert res.to_report()["time_limit"] == {
+        "seconds": 0.0, "reached": True, "skipped": ["rebuild 1 (segments [2] faceted)"]}
+    calls.clear()
+    res = build_brep(V, F, labels, box_planes(), time_limit=3600.0)
+    assert calls == [6, 5 + 8] and res.to_report()["not_built"] == [2]
+    assert res.time_limit == {"seconds": 3600.0, "reached": False, "skipped": []}
+    assert "time limit" not in res.message
+    assert build_brep(V, F, labels, box_planes()).time_limit is None
+
+
+def test_time_limit_keeps_the_open_shell_and_skips_the_second_passes(monkeypatch):
+    """Past the time limit, a closed mesh's valid open shell is kept as it is: its built faces
+    along the free edges are not faceted."""
+    import igl_heatseg.cad.build as build_mod
+
+    real_assemble, calls = build_mod.assemble, []
+
+    def without_side_2(faces, *args, **kwargs):
+        calls.append(len(faces))
+        return real_assemble(faces[:2] + faces[3:], *args, **kwargs)
+
+    monkeypatch.setattr(build_mod, "assemble", without_side_2)
+    V, F, labels = box_mesh(2)
+    res = build_brep(V, F, labels, box_planes(), time_limit=0.0)
+    assert calls == [6] and not res.faceted_model
+    assert res.to_report()["not_built"] == [] and res.fidelity["solids"] == 0
+    assert "shell is open" in res.message and "skipped rebuild 1" in res.message
+    with pytest.raises(MeshError, match="time_limit"):
+        build_brep(V, F, labels, box_planes(), time_limit=-1.0)
 
 
 def test_faces_with_loose_edges_are_meshed_at_their_edges_tolerance():

@@ -18,6 +18,7 @@ from igl_heatseg.batch.jobs import JOB_KINDS, cad_file  # noqa: E402
 from igl_heatseg.cad import read_step  # noqa: E402
 from igl_heatseg.cad.fidelity import brep_fidelity, faces_of  # noqa: E402
 from igl_heatseg.cli import main  # noqa: E402
+from igl_heatseg.errors import MeshError  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -87,6 +88,26 @@ def test_run_step_writes_the_step_file_and_cad_section(cube_obj, tmp_path):
     assert "parameterization" in rep and rep["cad"]["fidelity"]["solids"] == 1
     assert len(faces_of(read_step(out / "model.step"))) == 6
     assert (out / "atlas.obj").exists()
+    assert rep["cad"]["time_limit"] is None
+
+
+def test_time_limit_is_the_jobs_and_reported(cube_obj, tmp_path, capsys):
+    """`--time-limit` counts from the start of the job: the report gives it and what the
+    build had left of it; a bad value is one line, exit 2."""
+    path, V, F = cube_obj
+    for argv in (["cad", str(path), "-o", str(tmp_path / "c")],
+                 ["run", str(path), "-o", str(tmp_path / "r"), "--step", "--mode", "robust"]):
+        assert main(argv + ["--no-pictures", "--time-limit", "3600"]) == 0
+        limit = json.loads((tmp_path / argv[3] / "report.json").read_text())["cad"]["time_limit"]
+        assert limit["seconds"] == 3600.0 and 3000 < limit["build_seconds"] < 3600
+        assert limit["reached"] is False and limit["skipped"] == []
+    for bad in ("0", "-5", "inf", "soon"):
+        with pytest.raises(SystemExit):
+            main(["cad", str(path), "-o", str(tmp_path / "x"), "--time-limit", bad])
+        assert "--time-limit" in capsys.readouterr().err
+    with pytest.raises(MeshError, match="time_limit"):
+        cad_file(path, tmp_path / "y", time_limit=float("nan"))
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, cube_obj, capsys):

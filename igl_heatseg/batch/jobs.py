@@ -198,6 +198,7 @@ def run_file(
     tol: float | None = None,
     progress=None,
     gutter: float | None = None,
+    time_limit: float | None = None,
 ) -> JobOutput:
     """Load, run the pipeline and write one mesh: what ``igl-heatseg run MESH -o OUT`` does.
 
@@ -210,9 +211,10 @@ def run_file(
         As for :func:`~igl_heatseg.pipeline.run_pipeline`.
     pictures : bool
         Render the pictures (skipped with a warning without the ``viz`` extra).
-    step, tol
+    step, tol, time_limit
         Also build the B-Rep and write ``model.step`` (:func:`write_cad`, freeform faces over
-        the certified chart maps; ``report["cad"]``), at modelling tolerance ``tol``.
+        the certified chart maps; ``report["cad"]``), at modelling tolerance ``tol``, starting
+        no further rebuild ``time_limit`` seconds after the start (as for :func:`cad_file`).
     progress : callable(stage, fraction), optional
 
     Returns
@@ -222,7 +224,7 @@ def run_file(
         :class:`~igl_heatseg.pipeline.PipelineResult`.
     """
     if step:
-        _check_cad(tol)
+        _check_cad(tol, time_limit)
     t0 = time.perf_counter()
     mesh = load_mesh(mesh_path, repair=repair)
     t_load = time.perf_counter() - t0
@@ -248,7 +250,9 @@ def run_file(
         pics = write_pictures(tmp, res) if pictures else None
         if step:
             extra["cad"] = write_cad(tmp, mesh, res.segmentation, res.charts, tol=tol,
-                                     pictures=pictures, progress=progress)
+                                     pictures=pictures, progress=progress,
+                                     time_limit=_time_left(time_limit, t0))
+            _job_time_limit(extra["cad"], time_limit)
         report = write_run(tmp, res, extra, t_start=t0, pictures=pics)
         write_input_labels(tmp, mesh, res.segmentation.labels)
     return JobOutput(report, mesh, res)
@@ -258,15 +262,32 @@ def run_file(
 PICTURE_DEFLECTION_REL = 1e-3
 
 
-def _check_cad(tol) -> None:
-    """OCP importable (else ImportError with the install hint) and ``tol`` positive."""
+def _check_cad(tol, time_limit=None) -> None:
+    """OCP importable (else ImportError with the install hint), ``tol`` and ``time_limit``
+    positive."""
     from ..cad import build_brep  # noqa: F401  (the import checks OCP)
 
     if tol is not None and not (np.isfinite(tol) and tol > 0):
         raise MeshError(f"tol must be a positive number (model units), got {tol!r}")
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit > 0):
+        raise MeshError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
 
 
-def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=None) -> dict:
+def _time_left(time_limit, t0: float) -> float | None:
+    """Seconds of ``time_limit`` (counted from ``t0``) left for the B-Rep build, >= 0."""
+    return None if time_limit is None else max(time_limit - (time.perf_counter() - t0), 0.0)
+
+
+def _job_time_limit(cad: dict, time_limit) -> None:
+    """The ``cad`` section's ``time_limit``: the job's (``seconds``, counted from its start),
+    and the part of it the build had (``build_seconds``)."""
+    if time_limit is not None and cad.get("time_limit") is not None:
+        left = cad["time_limit"]["seconds"]
+        cad["time_limit"].update(seconds=float(time_limit), build_seconds=round(left, 3))
+
+
+def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=None,
+              time_limit=None) -> dict:
     """Build the B-Rep of a segmentation, write ``out/model.step`` (AP214, mm) and, with
     ``pictures``, ``out/brep.png``; returns the ``cad`` section of ``report.json``.
 
@@ -274,7 +295,8 @@ def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=
     segmentation without surfaces (paper mode) gets one fitted per segment
     (:func:`~igl_heatseg.cad.fit_segment_surfaces`). With ``charts`` (the pipeline's),
     freeform segments are fitted over their certified chart maps
-    (:func:`~igl_heatseg.cad.chart_uvs`).
+    (:func:`~igl_heatseg.cad.chart_uvs`). ``time_limit``: seconds after which the build starts
+    no further rebuild (:func:`~igl_heatseg.cad.build_brep`).
 
     Returns
     -------
@@ -293,7 +315,8 @@ def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=
         surfaces = fit_segment_surfaces(mesh.V, mesh.F, seg.labels)
     t_fit = time.perf_counter() - t
     uv = chart_uvs(seg.labels, surfaces, charts) if charts is not None else None
-    res = build_brep(mesh.V, mesh.F, seg.labels, surfaces, uv=uv, tol=tol, progress=progress)
+    res = build_brep(mesh.V, mesh.F, seg.labels, surfaces, uv=uv, tol=tol, progress=progress,
+                     time_limit=time_limit)
     t = time.perf_counter()
     write_step(res.shape, out / "model.step", unit="mm")
     cad = res.to_report()
@@ -330,6 +353,7 @@ def cad_file(
     repair: bool = False,
     pictures: bool = True,
     progress=None,
+    time_limit: float | None = None,
 ) -> JobOutput:
     """Load, segment, build the B-Rep and write one mesh: what ``igl-heatseg cad MESH -o OUT``
     does.
@@ -343,6 +367,11 @@ def cad_file(
         Modelling tolerance (model units) of :func:`~igl_heatseg.cad.build_brep`.
     pictures : bool
     progress : callable(stage, fraction), optional
+    time_limit : float, optional
+        Seconds from the start after which the B-Rep build starts no further rebuild or
+        second pass (:func:`~igl_heatseg.cad.build_brep`; what loading and segmenting took
+        is counted). The build running then is finished, and the fidelity, STEP file and
+        pictures follow, so the job takes longer than this.
 
     Returns
     -------
@@ -356,7 +385,7 @@ def cad_file(
     MeshError
         Bad mesh or ``tol``; nothing is written.
     """
-    _check_cad(tol)
+    _check_cad(tol, time_limit)
     t0 = time.perf_counter()
     mesh = load_mesh(mesh_path, repair=repair)
     t_load = time.perf_counter() - t0
@@ -367,7 +396,9 @@ def cad_file(
     extra.update(input_report(mesh, seg.labels))
     with atomic_dir(out) as tmp:
         t = time.perf_counter()
-        extra["cad"] = write_cad(tmp, mesh, seg, tol=tol, pictures=pictures, progress=progress)
+        extra["cad"] = write_cad(tmp, mesh, seg, tol=tol, pictures=pictures, progress=progress,
+                                 time_limit=_time_left(time_limit, t0))
+        _job_time_limit(extra["cad"], time_limit)
         extra["timings"]["cad"] = time.perf_counter() - t
         report = write_segmentation(tmp, mesh, seg, extra, t_start=t0)
         write_input_labels(tmp, mesh, seg.labels)
@@ -466,7 +497,7 @@ JOB_KINDS: dict[str, JobKind] = {
         "cad",
         cad_file,
         _summarize_cad,
-        ("mode", "theta", "eps", "solver", "tol", "pictures", "repair"),
+        ("mode", "theta", "eps", "solver", "tol", "pictures", "repair", "time_limit"),
         ("brep.png",),
         warm_up=_warm_segment,
     ),

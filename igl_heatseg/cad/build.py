@@ -22,7 +22,7 @@ import igl
 import numpy as np
 
 from igl_heatseg.errors import MeshError
-from igl_heatseg.mesh.topology import edge_topology
+from igl_heatseg.mesh.topology import edge_topology, face_components
 from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
 
@@ -434,7 +434,8 @@ def _faceted_result(V, F, ctx, closed, timings, message):
     return shape
 
 
-def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadResult:
+def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
+               time_limit=None) -> CadResult:
     """Sewn B-Rep of a segmented mesh with one fitted surface per segment.
 
     Parameters
@@ -456,6 +457,11 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
         it when one fits closer (else a far one is faceted). Default DEFAULT_TOL_REL x diag.
     progress : callable, optional
         ``progress(stage, fraction)``.
+    time_limit : float, optional
+        Seconds after which no further build is started: no rebuild, no second pass and no
+        part-by-part build (the one running is finished, so the build can take longer). A
+        model still invalid then is written faceted, a valid open shell kept as it is; the
+        result's ``message`` and ``time_limit`` say what was skipped. None: no limit.
 
     Returns
     -------
@@ -495,8 +501,12 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     (True, 1, 1.0)
     """
     V, F, labels = check_inputs(V, F, labels, surfaces, uv)
+    if time_limit is not None and not (np.isfinite(time_limit) and time_limit >= 0):
+        raise MeshError(f"time_limit must be a number of seconds >= 0, got {time_limit!r}")
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
+    ctx["deadline"] = None if time_limit is None else time.perf_counter() + time_limit
+    ctx["skipped"] = []  # what the time limit left out
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
     closed = bool(edge_topology(F).interior.all())  # every edge has two faces
@@ -514,7 +524,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     timings["surfaces"] = time.perf_counter() - t  # (the stand-ins fitted there are kept)
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, given, surfaces, uv, ctx, closed, timings, progress)
-    if touched and (faceted_model or (closed and not solid)):
+    if touched and (faceted_model or (closed and not solid)) and not _out_of_time(
+            ctx, "the build with the segmentation's borders"):
         logger.warning("the model with border faces of segments %s moved is %s; building it "
                        "again with the segmentation's borders", sorted(touched),
                        "faceted" if faceted_model else "not a solid")
@@ -533,12 +544,15 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
     # faceted patch's triangles are blamed on the built faces they touch; when that leaves no
     # solid, the model is built again blaming every built segment next to the patch.
     for key, allow, what, instead, if_faceted in (
-            ("fallbacks", "bspline", "B-spline stand-ins", "without them", True),
+            ("fallbacks", "bspline", "B-spline stand-ins", "without the B-spline stand-ins",
+             True),
             ("widened", "wide_area", "narrow faces that only BOUNDARY_SHIFT's slack admitted",
-             "without them", False),
+             "without those narrow faces", False),
             ("narrowed", "touching", "the defects of their faceted triangles blamed on the "
-             "built faces they touch", "blaming every built segment next to them", True)):
-        if ctx[key] and ((faceted_model and if_faceted) or (closed and not solid)):
+             "built faces they touch", "blaming every built segment next to the faceted triangles",
+             True)):
+        if ctx[key] and ((faceted_model and if_faceted) or (closed and not solid)) and \
+                not _out_of_time(ctx, f"the build {instead}"):
             logger.warning("the model with %s for segments %s is %s; building it again %s",
                            what, sorted(ctx[key]),
                            "faceted" if faceted_model else "not a solid", instead)
@@ -547,20 +561,60 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None) -> CadR
             if (not again[3], again[5]) > (not faceted_model, solid):
                 shape, status, sew_tol, faceted_model, message, solid = again
     tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
-    if faceted_model:  # a part of the mesh that no rebuild mends need not facet the others
+    # a part of the mesh that no rebuild mends need not facet the others
+    if faceted_model and face_components(F)[0] > 1 and not _out_of_time(
+            ctx, "the part-by-part build"):
         t = time.perf_counter()
-        parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"], build_brep, progress)
+        parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"],
+                                   _until(ctx["deadline"]), progress)
         if parts is not None:
             timings["components"] = time.perf_counter() - t
         if parts is not None and not parts[3]:  # (each part was sewn with its own tolerance)
-            return CadResult(*parts[:3], timings, {**tols, "sew_tol": None}, *parts[3:])
+            return CadResult(*parts[:3], timings, {**tols, "sew_tol": None},
+                             parts[3], _with_time_note(parts[4], ctx), parts[5],
+                             _time_report(ctx, time_limit))
     t = time.perf_counter()
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)
     timings["fidelity"] = time.perf_counter() - t
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
-    return CadResult(shape, status, fid, timings, tols, faceted_model, message, moved)
+    return CadResult(shape, status, fid, timings, tols, faceted_model,
+                     _with_time_note(message, ctx), moved,
+                     _time_report(ctx, time_limit))
+
+
+def _until(deadline):
+    """:func:`build_brep` with the time left until ``deadline`` (None: no limit) as its
+    ``time_limit`` when called."""
+    def build(*args, **kwargs):
+        left = None if deadline is None else max(deadline - time.perf_counter(), 0.0)
+        return build_brep(*args, time_limit=left, **kwargs)
+
+    return build
+
+
+def _out_of_time(ctx, what: str) -> bool:
+    """Whether the time limit has passed; if so, ``what`` (a build left out) is noted."""
+    if ctx["deadline"] is None or time.perf_counter() < ctx["deadline"]:
+        return False
+    logger.warning("time limit reached: %s is not started", what)
+    ctx["skipped"].append(what)
+    return True
+
+
+def _with_time_note(message: str, ctx) -> str:
+    if not ctx["skipped"]:
+        return message
+    note = "time limit reached: skipped " + "; ".join(ctx["skipped"])
+    return f"{message}; {note}" if message else note
+
+
+def _time_report(ctx, time_limit) -> dict | None:
+    if time_limit is None:
+        return None
+    return {"seconds": float(time_limit), "reached": bool(ctx["skipped"]),
+            "skipped": list(ctx["skipped"])}
 
 
 def _forget(ctx, segments) -> None:
@@ -584,6 +638,13 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     extra = False  # whether a build went to leaving them out (besides MAX_REBUILDS)
     try:
         for attempt in range(MAX_REBUILDS + 2):  # (one more when triangles were left out)
+            if attempt and _out_of_time(ctx, f"rebuild {attempt} (segments {sorted(skip)} "
+                                               "faceted)"):
+                if kept is None:
+                    raise _InvalidBRep("the sewn B-Rep is invalid (BRepCheck) and the time "
+                                       "limit left no time to facet its invalid faces")
+                shape, info, status, skip = kept
+                break
             attempt -= extra
             faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
                                                          timings, progress, skip, cache)

@@ -43,6 +43,9 @@ class CadResult:
         labels given, segment built with;
         :func:`~igl_heatseg.cad.surface_choice.settle`); the faces of a segment are those of
         the labels given with these moves.
+    time_limit : dict or None
+        With a time limit: ``seconds``, ``reached`` (bool) and ``skipped`` (the builds it left
+        out, as text); None without one.
     """
 
     shape: object
@@ -54,6 +57,7 @@ class CadResult:
     message: str = ""
     border_faces_moved: np.ndarray = field(
         default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    time_limit: dict | None = None
 
     @property
     def not_built(self) -> list:
@@ -71,4 +75,5 @@ class CadResult:
             "faceted_model": bool(self.faceted_model),
             "message": self.message,
             "border_faces_moved": np.asarray(self.border_faces_moved).tolist(),
+            "time_limit": None if self.time_limit is None else dict(self.time_limit),
         }

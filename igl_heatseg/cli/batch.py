@@ -93,7 +93,9 @@ def register(subparsers) -> None:
         type=float,
         default=600.0,
         metavar="S",
-        help="seconds a mesh may take before it is killed (default 600; 0 for no limit)",
+        help="seconds a mesh may take before it is killed (default 600; 0 for no limit); "
+        "--command cad starts no further rebuild of a B-Rep after half of it, so that a model "
+        "is written",
     )
     p.add_argument(
         "--repair",

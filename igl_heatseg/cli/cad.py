@@ -12,6 +12,7 @@ from .common import (
     add_repair_argument,
     add_segment_arguments,
     add_solver_argument,
+    add_time_limit_argument,
     progress_for,
     repair_summary,
 )
@@ -56,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
             repair=bool(getattr(args, "repair", False)),
             pictures=args.pictures,
             progress=progress_for(args),
+            time_limit=args.time_limit,
         )
     except ImportError as exc:  # OCP (the `cad` extra) missing
         print(f"igl-heatseg: error: {exc}", file=sys.stderr)
@@ -71,8 +73,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(subparsers) -> None:
-    """Add ``igl-heatseg cad MESH -o DIR [--mode robust|paper] [--tol T] [--repair]
-    [--no-pictures]``."""
+    """Add ``igl-heatseg cad MESH -o DIR [--mode robust|paper] [--tol T] [--time-limit S]
+    [--repair] [--no-pictures]``."""
     p = subparsers.add_parser(
         "cad",
         help="segment a mesh and build its B-Rep (STEP)",
@@ -98,6 +100,7 @@ def register(subparsers) -> None:
         "surface gets a B-spline face within it, else is faceted (default 1 %% of the "
         "bounding-box diagonal)",
     )
+    add_time_limit_argument(p)
     add_repair_argument(p)
     p.add_argument(
         "--no-pictures",

@@ -17,6 +17,7 @@ __all__ = [
     "add_progress_argument",
     "progress_for",
     "add_repair_argument",
+    "add_time_limit_argument",
     "repair_summary",
 ]
 
@@ -143,6 +144,30 @@ def add_repair_argument(p: argparse.ArgumentParser) -> None:
         "orient each component consistently (outward when closed); every change is counted in "
         "report.json `repairs`, outputs stay in the input's face and vertex order (a dropped "
         "face takes the label across its longest edge, -1 when there is none)",
+    )
+
+
+def _seconds(text: str) -> float:
+    """argparse type: a positive, finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not (value > 0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
+    return value
+
+
+def add_time_limit_argument(p: argparse.ArgumentParser, prefix: str = "") -> None:
+    """Add ``--time-limit S`` (the B-Rep build's ``time_limit``, counted from the start)."""
+    p.add_argument(
+        "--time-limit",
+        type=_seconds,
+        default=None,
+        metavar="S",
+        help=f"{prefix}seconds from the start after which the B-Rep build starts no further "
+        "rebuild or second pass: the model it has is written (a still invalid one faceted), "
+        "and report.json `cad.time_limit` says what was skipped (default: no limit)",
     )
 
 

@@ -15,6 +15,7 @@ from .common import (
     add_repair_argument,
     add_segment_arguments,
     add_solver_argument,
+    add_time_limit_argument,
     progress_for,
     repair_summary,
 )
@@ -85,6 +86,7 @@ def _run_file(args: argparse.Namespace):
         tol=getattr(args, "tol", None),
         progress=progress_for(args),
         gutter=args.gutter,
+        time_limit=getattr(args, "time_limit", None),
     )
 
 
@@ -172,5 +174,6 @@ def register(subparsers) -> None:
         metavar="T",
         help="--step: modelling tolerance in model units (default 1 %% of the bbox diagonal)",
     )
+    add_time_limit_argument(p, "--step: ")
     add_progress_argument(p)
     p.set_defaults(func=run)

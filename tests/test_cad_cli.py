@@ -18,6 +18,7 @@ from igl_heatseg.batch.jobs import JOB_KINDS, cad_file  # noqa: E402
 from igl_heatseg.cad import read_step  # noqa: E402
 from igl_heatseg.cad.fidelity import brep_fidelity, faces_of  # noqa: E402
 from igl_heatseg.cli import main  # noqa: E402
+from igl_heatseg.cli.common import TIME_LIMIT_DEFAULT  # noqa: E402
 from igl_heatseg.errors import MeshError  # noqa: E402
 
 
@@ -88,7 +89,7 @@ def test_run_step_writes_the_step_file_and_cad_section(cube_obj, tmp_path):
     assert "parameterization" in rep and rep["cad"]["fidelity"]["solids"] == 1
     assert len(faces_of(read_step(out / "model.step"))) == 6
     assert (out / "atlas.obj").exists()
-    assert rep["cad"]["time_limit"] is None
+    assert rep["cad"]["time_limit"]["seconds"] == TIME_LIMIT_DEFAULT  # the command's default
 
 
 def test_time_limit_is_the_jobs_and_reported(cube_obj, tmp_path, capsys):
@@ -101,7 +102,10 @@ def test_time_limit_is_the_jobs_and_reported(cube_obj, tmp_path, capsys):
         limit = json.loads((tmp_path / argv[3] / "report.json").read_text())["cad"]["time_limit"]
         assert limit["seconds"] == 3600.0 and 3000 < limit["build_seconds"] < 3600
         assert limit["reached"] is False and limit["skipped"] == []
-    for bad in ("0", "-5", "inf", "soon"):
+    assert main(["cad", str(path), "-o", str(tmp_path / "n"), "--no-pictures",
+                 "--time-limit", "0"]) == 0  # no limit
+    assert json.loads((tmp_path / "n" / "report.json").read_text())["cad"]["time_limit"] is None
+    for bad in ("-5", "inf", "soon"):
         with pytest.raises(SystemExit):
             main(["cad", str(path), "-o", str(tmp_path / "x"), "--time-limit", bad])
         assert "--time-limit" in capsys.readouterr().err

@@ -18,6 +18,7 @@ __all__ = [
     "progress_for",
     "add_repair_argument",
     "add_time_limit_argument",
+    "TIME_LIMIT_DEFAULT",
     "repair_summary",
 ]
 
@@ -147,27 +148,36 @@ def add_repair_argument(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _seconds(text: str) -> float:
-    """argparse type: a positive, finite number of seconds."""
+#: ``cad`` and ``run --step``: seconds after which the B-Rep build starts no further rebuild,
+#: unless ``--time-limit`` says otherwise (the batch's half of its 600 s timeout; no tuning or
+#: validation part came near it, a fresh 40k-triangle housing took over 15 minutes without it).
+TIME_LIMIT_DEFAULT = 300.0
+
+
+def _seconds(text: str) -> float | None:
+    """argparse type: a non-negative, finite number of seconds; 0 is None (no limit)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not (value > 0 and value != float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
-    return value
+    if not (value >= 0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(
+            f"must be a number of seconds >= 0 (0: no limit), got {text!r}")
+    return value or None
 
 
 def add_time_limit_argument(p: argparse.ArgumentParser, prefix: str = "") -> None:
-    """Add ``--time-limit S`` (the B-Rep build's ``time_limit``, counted from the start)."""
+    """Add ``--time-limit S`` (the B-Rep build's ``time_limit``, counted from the start;
+    default :data:`TIME_LIMIT_DEFAULT`, 0 for none)."""
     p.add_argument(
         "--time-limit",
         type=_seconds,
-        default=None,
+        default=TIME_LIMIT_DEFAULT,
         metavar="S",
         help=f"{prefix}seconds from the start after which the B-Rep build starts no further "
         "rebuild or second pass: the model it has is written (a still invalid one faceted), "
-        "and report.json `cad.time_limit` says what was skipped (default: no limit)",
+        "and report.json `cad.time_limit` says what was skipped (default "
+        f"{TIME_LIMIT_DEFAULT:g}; 0 for no limit)",
     )
 
 

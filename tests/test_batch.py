@@ -239,6 +239,41 @@ def test_a_cad_job_gets_a_share_of_its_timeout_as_its_time_limit(monkeypatch, tm
                     {"time_limit": 60}, {"mode": "robust"}]
 
 
+def test_cad_rows_give_the_brep_and_a_skipped_row_keeps_its_reason(tmp_path):
+    """A cad job's summary row: the B-Rep's kind, faceted segments, distances, and the build's
+    message as its reason (what the time limit skipped); a skipped row keeps its own reason;
+    the CSV has the columns and the gallery card the numbers."""
+    from igl_heatseg.batch.summary import COLUMNS, skipped_record, write_gallery, write_summary
+
+    report = {"faces": 900, "segments": 30, "timings": {"total": 12.5},
+              "cad": {"not_built": [3, 7], "faceted_model": False,
+                      "message": "closed mesh but the shell is open; time limit reached: "
+                                 "skipped rebuild 1 (segments [3] faceted)",
+                      "fidelity": {"valid": True, "solids": 0, "shells": 2,
+                                   "hausdorff_rel": 0.0079, "volume_rel_error": None}}}
+    row = JOB_KINDS["cad"].summarize(report)
+    assert row["brep"] == "2 shells" and row["faceted"] == 2
+    assert row["hausdorff_pct"] == 0.79 and row["volume_error_pct"] is None
+    assert "time limit reached" in row["reason"]
+    folder = tmp_path / "part"
+    folder.mkdir()
+    (folder / "report.json").write_text(json.dumps(report))
+    skipped = skipped_record("part.obj", "part.obj", str(folder), JOB_KINDS["cad"].summarize)
+    assert skipped["reason"].startswith("complete output found") and skipped["faceted"] == 2
+    assert skipped["seconds"] == 12.5
+    assert {"brep", "faceted", "hausdorff_pct", "volume_error_pct"} <= set(COLUMNS)
+    done = dict(row, mesh="part.obj", status="done", output=str(folder), seconds=12.5)
+    write_summary(tmp_path, [done], {})
+    rows = list(csv.DictReader((tmp_path / "summary.csv").open()))
+    assert rows[0]["brep"] == "2 shells" and float(rows[0]["hausdorff_pct"]) == 0.79
+    assert "brep 2 shells, faceted 2" in write_gallery(tmp_path, [done]).read_text()
+    faceted = dict(report["cad"], faceted_model=True,
+                   fidelity={"valid": False, "solids": 1, "shells": 1})
+    assert JOB_KINDS["cad"].summarize(dict(report, cad=faceted))["brep"] == (
+        "faceted solid (invalid)")
+    assert JOB_KINDS["segment"].summarize(report).get("brep") is None
+
+
 def test_timeout_and_memory_limit_in_the_job(meshes, tmp_path):
     root, _ = meshes
     mesh = str(root / "spheres" / "s3.off")

@@ -430,7 +430,38 @@ def _summarize_segment(report: dict) -> dict:
 
 
 def _summarize_cad(report: dict) -> dict:
-    return {"faces": report.get("faces"), "segments": report.get("segments")}
+    """Summary columns of a ``cad`` job: ``brep`` (``solid``, ``shell`` or ``N solids`` /
+    ``N shells``, ``faceted`` before it when the whole model is, `` (invalid)`` after it when it
+    fails BRepCheck), ``faceted`` (segments not built), ``hausdorff_pct`` and
+    ``volume_error_pct`` (per cent of the diagonal and of the mesh's volume), and as ``reason``
+    the build's message (why no solid, what was faceted, what the time limit skipped).
+
+    Examples
+    --------
+    >>> rep = {"faces": 12, "segments": 6, "cad": {"not_built": [2], "faceted_model": False,
+    ...        "message": "1 face(s) faceted", "fidelity": {"valid": True, "solids": 1,
+    ...        "shells": 1, "hausdorff_rel": 0.00123, "volume_rel_error": 2e-5}}}
+    >>> row = _summarize_cad(rep)
+    >>> row["brep"], row["faceted"], row["hausdorff_pct"], row["volume_error_pct"], row["reason"]
+    ('solid', 1, 0.123, 0.002, '1 face(s) faceted')
+    """
+    cad = report.get("cad") or {}
+    fid = cad.get("fidelity") or {}
+    solids, shells = int(fid.get("solids") or 0), int(fid.get("shells") or 0)
+    kind = "solid" if solids and solids == shells else "shell"
+    n = max(solids, shells)
+    brep = (("faceted " if cad.get("faceted_model") else "") + (f"{n} {kind}s" if n > 1 else kind)
+            + ("" if fid.get("valid") else " (invalid)"))
+    h, v = fid.get("hausdorff_rel"), fid.get("volume_rel_error")
+    return {
+        "faces": report.get("faces"),
+        "segments": report.get("segments"),
+        "brep": brep if cad else None,
+        "faceted": len(cad.get("not_built", [])) if cad else None,
+        "hausdorff_pct": None if h is None else round(100 * float(h), 3),
+        "volume_error_pct": None if v is None else round(100 * float(v), 3),
+        "reason": cad.get("message") or "",
+    }
 
 
 def _summarize_run(report: dict) -> dict:

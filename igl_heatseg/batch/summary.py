@@ -38,6 +38,10 @@ COLUMNS = (
     "charts",
     "bijective",
     "fallback",
+    "brep",
+    "faceted",
+    "hausdorff_pct",
+    "volume_error_pct",
     "seconds",
     "peak_memory_mb",
     "output",
@@ -60,7 +64,7 @@ def skipped_record(mesh: str, input_path: str, output: str, summarize) -> dict:
     }
     try:
         report = json.loads((Path(output) / COMPLETE_MARKER).read_text())
-        rec.update(summarize(report))
+        rec.update({k: v for k, v in summarize(report).items() if k != "reason"})
         rec["seconds"] = report.get("timings", {}).get("total")
     except (OSError, ValueError):
         pass
@@ -214,7 +218,8 @@ def write_gallery(out: str | os.PathLike, records, pictures=(), title: str = "")
         )
         nums = ", ".join(
             f"{k} {r[k]}"
-            for k in ("faces", "segments", "charts", "bijective", "fallback")
+            for k in ("faces", "segments", "charts", "bijective", "fallback", "brep", "faceted",
+                      "hausdorff_pct", "volume_error_pct")
             if r.get(k) is not None
         )
         parts.append(

@@ -40,6 +40,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: 
 from . import faceted, geometry, periodic, surface_choice  # noqa: E402
 from .blame import invalid_segments as _invalid_segments  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
+from .budget import TimeLimit  # noqa: E402
 from .components import build_by_component  # noqa: E402
 from .fidelity import brep_fidelity, face_area, face_samples  # noqa: E402
 from .result import CadResult  # noqa: E402
@@ -505,8 +506,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
         raise MeshError(f"time_limit must be a number of seconds >= 0, got {time_limit!r}")
     progress = progress or (lambda stage, frac: None)
     ctx = _tolerances(V, F, surfaces, tol)
-    ctx["deadline"] = None if time_limit is None else time.perf_counter() + time_limit
-    ctx["skipped"] = []  # what the time limit left out
+    limit = ctx["limit"] = TimeLimit(time_limit)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
     closed = bool(edge_topology(F).interior.all())  # every edge has two faces
@@ -524,8 +524,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
     timings["surfaces"] = time.perf_counter() - t  # (the stand-ins fitted there are kept)
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, given, surfaces, uv, ctx, closed, timings, progress)
-    if touched and (faceted_model or (closed and not solid)) and not _out_of_time(
-            ctx, "the build with the segmentation's borders"):
+    if touched and (faceted_model or (closed and not solid)) and not limit.out_of_time(
+            "the build with the segmentation's borders"):
         logger.warning("the model with border faces of segments %s moved is %s; building it "
                        "again with the segmentation's borders", sorted(touched),
                        "faceted" if faceted_model else "not a solid")
@@ -552,7 +552,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
              "built faces they touch", "blaming every built segment next to the faceted triangles",
              True)):
         if ctx[key] and ((faceted_model and if_faceted) or (closed and not solid)) and \
-                not _out_of_time(ctx, f"the build {instead}"):
+                not limit.out_of_time(f"the build {instead}"):
             logger.warning("the model with %s for segments %s is %s; building it again %s",
                            what, sorted(ctx[key]),
                            "faceted" if faceted_model else "not a solid", instead)
@@ -562,59 +562,25 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
                 shape, status, sew_tol, faceted_model, message, solid = again
     tols = {k: ctx[k] for k in ("tol", "curve_tol", "vertex_tol", "diag", "mean_edge")}
     # a part of the mesh that no rebuild mends need not facet the others
-    if faceted_model and face_components(F)[0] > 1 and not _out_of_time(
-            ctx, "the part-by-part build"):
+    if faceted_model and face_components(F)[0] > 1 and not limit.out_of_time(
+            "the part-by-part build"):
         t = time.perf_counter()
         parts = build_by_component(V, F, labels, surfaces, uv, ctx["tol"],
-                                   _until(ctx["deadline"]), progress)
+                                   lambda *a, **k: build_brep(*a, time_limit=limit.left(), **k),
+                                   progress)
         if parts is not None:
             timings["components"] = time.perf_counter() - t
         if parts is not None and not parts[3]:  # (each part was sewn with its own tolerance)
             return CadResult(*parts[:3], timings, {**tols, "sew_tol": None},
-                             parts[3], _with_time_note(parts[4], ctx), parts[5],
-                             _time_report(ctx, time_limit))
+                             parts[3], limit.note(parts[4]), parts[5], limit.report())
     t = time.perf_counter()
     progress("fidelity", 0.0)
     fid = brep_fidelity(shape, V, F)
     timings["fidelity"] = time.perf_counter() - t
     tols["sew_tol"] = sew_tol
     progress("fidelity", 1.0)
-    return CadResult(shape, status, fid, timings, tols, faceted_model,
-                     _with_time_note(message, ctx), moved,
-                     _time_report(ctx, time_limit))
-
-
-def _until(deadline):
-    """:func:`build_brep` with the time left until ``deadline`` (None: no limit) as its
-    ``time_limit`` when called."""
-    def build(*args, **kwargs):
-        left = None if deadline is None else max(deadline - time.perf_counter(), 0.0)
-        return build_brep(*args, time_limit=left, **kwargs)
-
-    return build
-
-
-def _out_of_time(ctx, what: str) -> bool:
-    """Whether the time limit has passed; if so, ``what`` (a build left out) is noted."""
-    if ctx["deadline"] is None or time.perf_counter() < ctx["deadline"]:
-        return False
-    logger.warning("time limit reached: %s is not started", what)
-    ctx["skipped"].append(what)
-    return True
-
-
-def _with_time_note(message: str, ctx) -> str:
-    if not ctx["skipped"]:
-        return message
-    note = "time limit reached: skipped " + "; ".join(ctx["skipped"])
-    return f"{message}; {note}" if message else note
-
-
-def _time_report(ctx, time_limit) -> dict | None:
-    if time_limit is None:
-        return None
-    return {"seconds": float(time_limit), "reached": bool(ctx["skipped"]),
-            "skipped": list(ctx["skipped"])}
+    return CadResult(shape, status, fid, timings, tols, faceted_model, limit.note(message),
+                     moved, limit.report())
 
 
 def _forget(ctx, segments) -> None:
@@ -638,8 +604,8 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     extra = False  # whether a build went to leaving them out (besides MAX_REBUILDS)
     try:
         for attempt in range(MAX_REBUILDS + 2):  # (one more when triangles were left out)
-            if attempt and _out_of_time(ctx, f"rebuild {attempt} (segments {sorted(skip)} "
-                                               "faceted)"):
+            if attempt and ctx["limit"].out_of_time(f"rebuild {attempt} (segments "
+                                                    f"{sorted(skip)} faceted)"):
                 if kept is None:
                     raise _InvalidBRep("the sewn B-Rep is invalid (BRepCheck) and the time "
                                        "limit left no time to facet its invalid faces")

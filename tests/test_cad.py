@@ -1568,6 +1568,30 @@ def test_model_broken_by_moved_border_faces_is_built_again_with_the_given_border
     assert res.faces[0]["reason"].startswith("surface deviates")
 
 
+def test_triangles_of_a_node_out_of_its_face_on_its_surface_are_left_out():
+    """OCC's mesher left a node of a fresh sprocket's small plane face 28 units away on the
+    plane (on the surface at its own (u, v), outside the face), and the Hausdorff distance read
+    21.7 % of the diagonal. The triangles of such a node are left out of the measure."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt, gp_Pnt2d
+    from OCP.TopLoc import TopLoc_Location
+
+    from igl_heatseg.cad.fidelity import mesh_faces
+
+    V, F, _ = box_mesh(4)
+    box = BRepPrimAPI_MakeBox(gp_Pnt(-1.0, -1.0, -1.0), 2.0, 2.0, 2.0).Shape()
+    mesh_faces(box, 1e-4)
+    face = faces_of(box)[0]  # the plane x = -1: u along z, v along -y, (0, 0) at (-1, -1, -1)
+    tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
+    tri.SetNode(1, gp_Pnt(-1.0, 5.0, 5.0))  # on the plane, far out of the face
+    tri.SetUVNode(1, gp_Pnt2d(6.0, -6.0))
+    fid = brep_fidelity(box, V, F)  # (8.49 with the node's triangles kept)
+    # what is left: the face's other triangle, and mesh points where the dropped one was
+    assert fid["hausdorff"] == pytest.approx(fid["hausdorff_mesh_to_brep"]) and \
+        fid["hausdorff"] < 1.5
+
+
 def test_a_stray_triangulation_node_is_put_back_on_its_surface():
     """OCC's mesher left a node of a fresh plate's cylinder face at the origin, 42.5 units off
     the face (its (u, v) on it), and the Hausdorff distance read 5.67 % of the diagonal instead

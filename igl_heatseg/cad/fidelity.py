@@ -337,30 +337,37 @@ def _face_triangles(face, deflection: float):
     triangulation. A node outside the face's box and farther than STRAY_NODE_FACTOR times the
     deflection (or the face's edge or vertex tolerance, when larger) from it and from the
     surface at its own (u, v) is put there (a node at a vertex is the vertex's point, off the
-    surface by up to the vertex's tolerance)."""
+    surface by up to the vertex's tolerance); the triangles of a node still that far out of the
+    box (on the surface, outside the face: a small plane's node 28 units away on its plane,
+    fresh sprocket_s7001) are left out."""
     tri, loc = _triangulation(face, deflection)
     if tri is None:
         return None
     trsf = loc.Transformation()
     P = np.array([[q.X(), q.Y(), q.Z()] for q in
                   (tri.Node(i).Transformed(trsf) for i in range(1, tri.NbNodes() + 1))])
-    if tri.HasUVNodes():
-        P = _mend_stray_nodes(face, tri, P, deflection)
     T = np.array([tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)]) - 1
+    if tri.HasUVNodes():
+        P, outside = _mend_stray_nodes(face, tri, P, deflection)
+        if outside is not None:  # triangles reaching out of the face are not of it, nor
+            T = T[~outside[T].any(axis=1)]  # the nodes only they used
+            used = np.unique(T)
+            P, T = P[used], np.searchsorted(used, T)
     return P, (T[:, ::-1] if face.Orientation() == TopAbs_REVERSED else T)
 
 
-def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray:
-    """``P`` (p, 3), the nodes of ``face``'s triangulation ``tri``, with the strays of
-    :func:`_face_triangles` put on the surface at their (u, v)."""
+def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> tuple:
+    """``(P, outside)``: ``P`` (p, 3), the nodes of ``face``'s triangulation ``tri``, with the
+    strays of :func:`_face_triangles` put on the surface at their (u, v); ``outside`` (p,) bool,
+    the nodes still out of the face's box by that margin, or None when there are none."""
     bounds = _bounds(face, triangulation=False)  # the geometry's box, not the triangulation's
     if bounds is None:
-        return P
+        return P, None
     lo, hi = bounds
     margin = STRAY_NODE_FACTOR * deflection
     out = np.flatnonzero(np.any((P < lo - margin) | (P > hi + margin), axis=1))
     if len(out) == 0:
-        return P
+        return P, None
     margin = STRAY_NODE_FACTOR * max(deflection, _tolerance(face),
                                      _tolerance(face, TopAbs_VERTEX))
     surf = BRepAdaptor_Surface(face)
@@ -372,7 +379,13 @@ def _mend_stray_nodes(face, tri, P: np.ndarray, deflection: float) -> np.ndarray
         logger.debug("%d stray triangulation node(s) put on the surface", stray.sum())
         P = P.copy()
         P[out[stray]] = S[stray]
-    return P
+    far = np.any((P[out] < lo - margin) | (P[out] > hi + margin), axis=1)
+    if not far.any():
+        return P, None
+    logger.debug("%d triangulation node(s) out of their face: its triangles left out", far.sum())
+    outside = np.zeros(len(P), dtype=bool)
+    outside[out[far]] = True
+    return P, outside
 
 
 def _triangles(shape, deflection: float):

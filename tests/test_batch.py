@@ -271,6 +271,8 @@ def test_cad_rows_give_the_brep_and_a_skipped_row_keeps_its_reason(tmp_path):
                    fidelity={"valid": False, "solids": 1, "shells": 1})
     assert JOB_KINDS["cad"].summarize(dict(report, cad=faceted))["brep"] == (
         "faceted solid (invalid)")
+    mixed = dict(report["cad"], fidelity={"valid": True, "solids": 1, "shells": 3})
+    assert JOB_KINDS["cad"].summarize(dict(report, cad=mixed))["brep"] == "3 shells (1 solids)"
     assert JOB_KINDS["segment"].summarize(report).get("brep") is None
 
 

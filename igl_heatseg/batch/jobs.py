@@ -430,9 +430,9 @@ def _summarize_segment(report: dict) -> dict:
 
 
 def _summarize_cad(report: dict) -> dict:
-    """Summary columns of a ``cad`` job: ``brep`` (``solid``, ``shell`` or ``N solids`` /
-    ``N shells``, ``faceted`` before it when the whole model is, `` (invalid)`` after it when it
-    fails BRepCheck), ``faceted`` (segments not built), ``hausdorff_pct`` and
+    """Summary columns of a ``cad`` job: ``brep`` (``solid``, ``shell``, ``N solids``, ``N shells``
+    or ``N shells (M solids)``, ``faceted`` before it when the whole model is, `` (invalid)``
+    after it when it fails BRepCheck), ``faceted`` (segments not built), ``hausdorff_pct`` and
     ``volume_error_pct`` (per cent of the diagonal and of the mesh's volume), and as ``reason``
     the build's message (why no solid, what was faceted, what the time limit skipped).
 
@@ -448,10 +448,13 @@ def _summarize_cad(report: dict) -> dict:
     cad = report.get("cad") or {}
     fid = cad.get("fidelity") or {}
     solids, shells = int(fid.get("solids") or 0), int(fid.get("shells") or 0)
-    kind = "solid" if solids and solids == shells else "shell"
-    n = max(solids, shells)
-    brep = (("faceted " if cad.get("faceted_model") else "") + (f"{n} {kind}s" if n > 1 else kind)
-            + ("" if fid.get("valid") else " (invalid)"))
+    if solids and solids == shells:
+        kind = "solid" if solids == 1 else f"{solids} solids"
+    else:
+        kind = ("shell" if shells <= 1 else f"{shells} shells") + (
+            f" ({solids} solids)" if solids else "")
+    brep = ("faceted " if cad.get("faceted_model") else "") + kind + (
+        "" if fid.get("valid") else " (invalid)")
     h, v = fid.get("hausdorff_rel"), fid.get("volume_rel_error")
     return {
         "faces": report.get("faces"),

@@ -126,6 +126,7 @@ def child_job(req: dict) -> dict:
         report = getattr(output, "report", output)
         rec = {"status": "done", "reason": ""}
         rec.update(kind.summarize(report))
+        rec["reason"] = _short(rec["reason"])  # (a cad job's is the build's message)
     except MemoryError as exc:
         rec = {
             "status": "memory",

@@ -339,7 +339,7 @@ def _face_triangles(face, deflection: float):
     surface at its own (u, v) is put there (a node at a vertex is the vertex's point, off the
     surface by up to the vertex's tolerance); the triangles of a node still that far out of the
     box (on the surface, outside the face: a small plane's node 28 units away on its plane,
-    fresh sprocket_s7001) are left out."""
+    held-out sprocket_s7001) are left out."""
     tri, loc = _triangulation(face, deflection)
     if tri is None:
         return None

@@ -8,12 +8,14 @@ the mesh (the report's) and to the part (to the noise-free mesh of a noisy part,
 the set's ``manifest.json`` with ``bench_cad.clean_mesh``), the volume error to the mesh and to
 the part (the noise-free mesh's volume: noise is not volume-neutral, the noisy tuning meshes'
 volumes are 0.08-0.10 % off their parts' at the median and up to 6 % on coarse noisy parts; a
-coarse tessellation's volume is its chords'),
-the seconds, the
+coarse tessellation's volume is its chords'), the Hausdorff distance and volume error to the
+true part (to a dense tessellation of its true surfaces, ``bench_cad.true_part_mesh``: a
+coarse export's facets are chords, which an exact B-Rep is not), the seconds, the
 border faces the build moved to a neighbouring segment, the B-Rep's faces (a faceted segment
 adds one per triangle) and the faceted triangles left out because sewing closed them up.
 Then the bars (Hausdorff and volume error <= 0.5 %) and the faceted segments by reason.
-The scores are cached in ``OUT/cad_score.json``.
+The scores are cached in ``OUT/cad_score.json`` (a cache without the true-part measures gets
+them added).
 
 Usage::
 
@@ -56,6 +58,9 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
             fid = json.loads((d / "report.json").read_text())["cad"]["fidelity"]
             scores[d.name]["vol_part"] = _volume_to_part(fid, manifest[d.name], cache)
             path.write_text(json.dumps(scores, indent=1) + "\n")
+        if d.name in scores and "to_true" not in scores[d.name] and d.name in manifest:
+            scores[d.name].update(_to_true_part(d, manifest[d.name], cache))
+            path.write_text(json.dumps(scores, indent=1) + "\n")
         if d.name in scores or d.name not in manifest:
             continue
         rep = json.loads((d / "report.json").read_text())
@@ -79,6 +84,7 @@ def score_run(setdir: Path, out: Path, cache: Path) -> dict:
             row["to_part"] = brep_fidelity(read_step(d / "model.step"), ref.V,
                                            ref.F)["hausdorff_rel"]
         row["vol_part"] = _volume_to_part(fid, entry, cache)
+        row.update(_to_true_part(d, entry, cache))
         scores[d.name] = row
         path.write_text(json.dumps(scores, indent=1) + "\n")
     return scores
@@ -99,6 +105,20 @@ def _volume_to_part(fid: dict, entry: dict, cache: Path) -> float | None:
     ref = load_mesh(clean_mesh(entry, cache))
     part = mesh_volume(ref.V, ref.F)
     return abs(fid["volume"] - part) / abs(part)
+
+
+def _to_true_part(d: Path, entry: dict, cache: Path) -> dict:
+    """``to_true`` (two-sided Hausdorff distance over the true part's diagonal) and
+    ``vol_true`` (relative volume error, None when the B-Rep is not closed) of ``d/model.step``
+    against a dense tessellation of the part's true surfaces."""
+    from bench_cad import true_part_mesh
+
+    from igl_heatseg.cad import brep_fidelity, read_step
+    from igl_heatseg.io import load_mesh
+
+    ref = load_mesh(true_part_mesh(entry, cache))
+    fid = brep_fidelity(read_step(d / "model.step"), ref.V, ref.F)
+    return {"to_true": fid["hausdorff_rel"], "vol_true": fid["volume_rel_error"]}
 
 
 def _pct(x) -> str:
@@ -126,6 +146,10 @@ def summary(scores: dict) -> dict:
             "volume error <= 0.5 %": sum(_ok(r["volume"]) for r in scores.values()),
             "volume error <= 0.5 % to the part": sum(_ok(r.get("vol_part"))
                                                     for r in scores.values()),
+            "Hausdorff <= 0.5 % to the true part": sum(_ok(r.get("to_true"))
+                                                      for r in scores.values()),
+            "volume error <= 0.5 % to the true part": sum(_ok(r.get("vol_true"))
+                                                         for r in scores.values()),
             "seconds (sum)": round(sum(r["seconds"] for r in scores.values()), 1),
             "parts over 30 s": sum(r["seconds"] > 30 for r in scores.values()),
             "border faces moved (parts)": f"{sum(moved)} ({sum(m > 0 for m in moved)})",
@@ -141,6 +165,7 @@ def _cell(r: dict | None) -> str:
     return (f"faceted {r['faceted']:3d}/{r['segments']:3d} {'solid' if r['solid'] else 'no solid'}"
             f" H {_pct(r['hausdorff'])} to part {_pct(r['to_part'])} vol {_pct(r['volume'])}"
             f" to part {_pct(r.get('vol_part'))}"
+            f" true part H {_pct(r.get('to_true'))} vol {_pct(r.get('vol_true'))}"
             f" faces {r.get('brep_faces')} {r['seconds']:.0f} s")
 
 
@@ -149,11 +174,12 @@ def main(argv=None) -> int:
     ap.add_argument("set", type=Path, help="the set's folder (with manifest.json)")
     ap.add_argument("runs", type=Path, nargs="+", help="one or two batch output folders")
     ap.add_argument("--clean", type=Path, default=None,
-                    help="cache of noise-free meshes (default: SET/../clean)")
+                    help="cache of noise-free and true-part meshes (default: SET/../clean)")
     args = ap.parse_args(argv)
     cache = args.clean or args.set.parent / "clean"
     runs = [score_run(args.set, out, cache) for out in args.runs[:2]]
-    keys = ("faceted", "solid", "hausdorff", "to_part", "volume", "vol_part", "brep_faces")
+    keys = ("faceted", "solid", "hausdorff", "to_part", "volume", "vol_part", "to_true",
+            "vol_true", "brep_faces")
     for name in sorted(set().union(*runs)):
         rows = [run.get(name) for run in runs]
         changed = len(rows) == 2 and (None in rows or any(rows[0][k] != rows[1][k]

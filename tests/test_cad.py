@@ -196,6 +196,27 @@ def test_capped_cylinder_three_faces_right_radius():
     assert BRepAdaptor_Surface(cyl[0]).Cylinder().Radius() == pytest.approx(R, rel=1e-12)
     assert fid["volume"] == pytest.approx(math.pi * R**2 * H, rel=1e-6)
     assert fid["hausdorff_rel"] < 1e-2  # chordal error of the 48-gon mesh
+    # the mesh is an exact tessellation: its vertices on the B-Rep, its facets chords of it
+    # (the vertices are measured through a mesh of the B-Rep: within its deflection)
+    assert fid["exact_tessellation"]
+    assert fid["vertex_hausdorff_rel"] * fid["bbox_diagonal"] <= fid["measurement_deflection"]
+    sagitta = R * (1 - math.cos(math.pi / 48))
+    assert fid["hausdorff"] == pytest.approx(sagitta, rel=0.05)
+
+
+def test_noisy_mesh_is_not_an_exact_tessellation():
+    R, H = 1.5, 2.0
+    prof = polyline([(0, 0), (R, 0)], 3) + polyline([(R, 0), (R, H)], 4)[1:] \
+        + polyline([(R, H), (0, H)], 3)[1:]
+    V, F, labels = revolve(prof, [0] * 3 + [1] * 4 + [2] * 3)
+    V = V + np.random.default_rng(3).normal(scale=1e-3, size=V.shape)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": R}),
+             Surface("plane", {"point": H * Z, "normal": Z})]
+    fid = build_brep(V, F, labels, surfs, tol=0.05).fidelity
+    assert not fid["exact_tessellation"]
+    assert fid["vertex_hausdorff_rel"] * fid["bbox_diagonal"] == pytest.approx(
+        fid["hausdorff_mesh_to_brep"])
 
 
 def test_cone_frustum():

@@ -179,6 +179,23 @@ def test_summary_counts_faceted_segments_and_bspline_stand_ins():
         "0 free edges, Hausdorff 0.40 % of the diagonal, volume error 0.10 %")
 
 
+def test_summary_explains_the_chords_of_an_exact_tessellation():
+    from igl_heatseg.cli.cad import cad_summary
+
+    def line(exact, at_vertices):
+        fid = {"valid": True, "solids": 1, "faces": 19, "free_edges": 0, "hausdorff_rel": 0.0101,
+               "vertex_hausdorff_rel": at_vertices, "exact_tessellation": exact,
+               "volume_rel_error": 0.0413}
+        return cad_summary({"fidelity": fid, "segments": 19, "faces": [], "not_built": []})
+
+    assert line(True, 0.0002).endswith(
+        "Hausdorff 1.01 % of the diagonal (mesh vertices 0.02 %: the mesh is an exact "
+        "tessellation, whose facets are chords of the curved faces), volume error 4.13 %")
+    assert "chords" not in line(False, 0.0002)  # noise: no such claim
+    assert "chords" not in line(True, 0.008)  # the vertices themselves are far
+    assert "chords" not in line(True, None)  # a report of before
+
+
 def test_summary_names_a_compound_of_parts():
     from igl_heatseg.cli.cad import cad_summary
 

@@ -9,6 +9,7 @@ import igl
 import numpy as np
 
 from ..mesh.geometry import face_areas
+from ..surfaces.tolerance import exact_tessellation
 from ._ocp import require_ocp
 
 require_ocp()
@@ -645,6 +646,11 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         short of their area (projected, inside the face), and by BRepExtrema to faces not
         tessellated), ``rms`` (mesh vertices to the B-Rep), ``hausdorff_rel`` (over
         the bbox diagonal),
+        ``vertex_hausdorff_rel`` (the mesh vertices' largest distance to the B-Rep over the
+        diagonal), ``exact_tessellation`` (the mesh is a noise-free tessellation,
+        :func:`~igl_heatseg.surfaces.tolerance.exact_tessellation`: its vertices lie on the
+        part's surfaces and its facets are chords of the curved ones, so an exact B-Rep is
+        ``vertex_hausdorff_rel`` from it and up to the chord error in the other direction),
         ``measurement_deflection`` (tessellation error bound of the distances: the largest
         deflection used, :func:`mesh_faces`),
         ``faces_not_tessellated`` (the B-Rep-to-mesh direction misses them), ``volume``,
@@ -683,6 +689,8 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         "measurement_deflection": deflection,
         "faces_not_tessellated": missing,
         "hausdorff_rel": haus / diag if diag > 0 else math.nan,
+        "vertex_hausdorff_rel": one_sided / diag if diag > 0 else math.nan,
+        "exact_tessellation": bool(len(F) > 0 and exact_tessellation(V, F)),
         "volume": None,
         "mesh_volume": None,
         "volume_rel_error": None,

@@ -20,6 +20,11 @@ from .common import (
 __all__ = ["register", "cad_summary"]
 
 
+#: The summary explains a distance this many times the mesh vertices' as the chord error of
+#: an exact tessellation (a coarse CAD export: an exact B-Rep bulges past its facets).
+CHORD_NOTE_RATIO = 2.0
+
+
 def cad_summary(cad: dict) -> str:
     """One line about a report's ``cad`` section: what was built and how close it is."""
     fid = cad.get("fidelity", {})
@@ -33,12 +38,17 @@ def cad_summary(cad: dict) -> str:
     vol_txt = f", volume error {100 * vol:.2f} %" if vol is not None else ""
     stand_ins = sum(f.get("built_as") == "bspline" and f.get("kind") != "freeform"
                     for f in cad.get("faces", []))
+    haus, at_vertices = fid.get("hausdorff_rel", float("nan")), fid.get("vertex_hausdorff_rel")
+    chords = ""
+    if fid.get("exact_tessellation") and at_vertices is not None and \
+            haus > CHORD_NOTE_RATIO * at_vertices:
+        chords = (f" (mesh vertices {100 * at_vertices:.2f} %: the mesh is an exact "
+                  "tessellation, whose facets are chords of the curved faces)")
     return (
         f"B-Rep: {valid} {kind}, {fid.get('faces')} faces from {cad.get('segments')} segments "
         f"({len(cad.get('not_built', []))} faceted, {stand_ins} analytic as B-splines), "
         f"{fid.get('free_edges')} free edges, "
-        f"Hausdorff {100 * fid.get('hausdorff_rel', float('nan')):.2f} % of the diagonal"
-        f"{vol_txt}"
+        f"Hausdorff {100 * haus:.2f} % of the diagonal{chords}{vol_txt}"
     )
 
 

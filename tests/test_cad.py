@@ -673,6 +673,39 @@ def test_face_read_back_out_of_place_is_named_by_its_vertices():
     assert len(out) == 1 and out[0].IsSame(top)
 
 
+def test_sliver_shell_split_off_by_the_reader_names_its_face():
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Shell
+
+    from igl_heatseg.cad import roundtrip
+
+    V, F, labels = box_mesh(2)
+    shape = build_brep(V, F, labels, box_planes()).shape
+    faces = faces_of(shape)
+    box = roundtrip._box(shape)
+    assert roundtrip._split_off(faces, shape, 1, box) == []
+    # what the STEP reader made of held-out bracket_s8007: the solid's shell, and beside it a
+    # shell of a sliver along the top face's diagonal (1e-6 wide; two of the top's corners)
+    top = next(f for f in faces if abs(roundtrip._box(f)[:, 2].mean() - 1) < 1e-3)
+    poly = BRepBuilderAPI_MakePolygon(gp_Pnt(1.0, 1.0, 1.0), gp_Pnt(-1.0, -1.0, 1.0),
+                                      gp_Pnt(0.0, 1e-6, 1.0), True)
+    sliver = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+    builder, extra, back = BRep_Builder(), TopoDS_Shell(), TopoDS_Compound()
+    builder.MakeShell(extra)
+    builder.Add(extra, sliver)
+    builder.MakeCompound(back)
+    builder.Add(back, roundtrip._shells(shape)[0])
+    builder.Add(back, extra)
+    named = roundtrip._split_off(faces, back, 1, box)
+    assert len(named) == 1 and named[0].IsSame(top)
+    # a second shell of real area is a part of its own, not a sliver
+    builder.Add(back, roundtrip._shells(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[0])
+    assert roundtrip._split_off(faces, back, 1, box) == []
+
+
 def test_invalid_segments_names_the_segment_of_an_invalid_face():
     from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon

@@ -15,7 +15,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.GeomAbs import GeomAbs_SurfaceType  # noqa: E402
 
 from igl_heatseg.cad import blame, brep_fidelity, build_brep, read_step, write_step  # noqa: E402
-from igl_heatseg.cad.fidelity import face_points, faces_of  # noqa: E402
+from igl_heatseg.cad.fidelity import face_points, faces_of, shells_of  # noqa: E402
 from igl_heatseg.errors import MeshError  # noqa: E402
 from igl_heatseg.surfaces.model import Surface  # noqa: E402
 
@@ -697,12 +697,12 @@ def test_sliver_shell_split_off_by_the_reader_names_its_face():
     builder.MakeShell(extra)
     builder.Add(extra, sliver)
     builder.MakeCompound(back)
-    builder.Add(back, roundtrip._shells(shape)[0])
+    builder.Add(back, shells_of(shape)[0])
     builder.Add(back, extra)
     named = roundtrip._split_off(faces, back, 1, box)
     assert len(named) == 1 and named[0].IsSame(top)
     # a second shell of real area is a part of its own, not a sliver
-    builder.Add(back, roundtrip._shells(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[0])
+    builder.Add(back, shells_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())[0])
     assert roundtrip._split_off(faces, back, 1, box) == []
 
 

@@ -46,7 +46,7 @@ from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "face_area", "face_points",
+__all__ = ["brep_fidelity", "count_free_edges", "faces_of", "shells_of", "face_area", "face_points",
            "face_samples", "tessellate", "tessellate_by_type", "face_type", "mesh_volume",
            "shape_analysis", "shape_valid", "shell_of"]
 
@@ -120,6 +120,15 @@ def faces_of(shape) -> list:
     out, ex = [], TopExp_Explorer(shape, TopAbs_FACE)
     while ex.More():
         out.append(TopoDS.Face(ex.Current()))
+        ex.Next()
+    return out
+
+
+def shells_of(shape) -> list:
+    """The shells of a shape, in exploration order."""
+    out, ex = [], TopExp_Explorer(shape, TopAbs_SHELL)
+    while ex.More():
+        out.append(TopoDS.Shell(ex.Current()))
         ex.Next()
     return out
 

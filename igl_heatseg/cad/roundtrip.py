@@ -20,11 +20,11 @@ require_ocp()
 from OCP.Bnd import Bnd_Box  # noqa: E402
 from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.BRepBndLib import BRepBndLib  # noqa: E402
-from OCP.TopAbs import TopAbs_SHELL, TopAbs_VERTEX  # noqa: E402
+from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
-from .fidelity import face_area, faces_of, shape_analysis, shell_of  # noqa: E402
+from .fidelity import face_area, faces_of, shape_analysis, shell_of, shells_of  # noqa: E402
 from .step import read_step, step_uncertainty, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -97,7 +97,7 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
             shell_of(mine), path, precision=step_uncertainty(shape)))
     checked = shape_analysis(back)
     if checked.IsValid():
-        written = 1 if exempt else max(len(_shells(shape)), 1)
+        written = 1 if exempt else max(len(shells_of(shape)), 1)
         return _dedupe(_stray_faces(mine, back, box) + _split_off(mine, back, written, box))
     # the reader may split a face (so not the order): each named by its shared vertices, or
     # by its place when it shares none and no face was split (a face without vertices)
@@ -110,20 +110,12 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     return _dedupe([mine[i] for i in named if i is not None]) or None
 
 
-def _shells(shape) -> list:
-    ex, out = TopExp_Explorer(shape, TopAbs_SHELL), []
-    while ex.More():
-        out.append(ex.Current())
-        ex.Next()
-    return out
-
-
 def _split_off(mine: list, back, written: int, box: np.ndarray) -> list:
     """Faces of ``mine`` that a reader split slivers off: the origins (shared vertices) of
     the faces of the shells read back beyond the ``written`` largest, when those shells hold
     less than SPLIT_AREA_REL of the read-back area. [] when none."""
-    shells = sorted(_shells(back), key=lambda sh: -len(faces_of(sh)))
-    extra = [f for sh in shells[written:] for f in faces_of(sh)]
+    by_size = sorted((faces_of(sh) for sh in shells_of(back)), key=len, reverse=True)
+    extra = [f for faces in by_size[written:] for f in faces]
     if not extra:
         return []
     total = sum(abs(face_area(f)) for f in faces_of(back))

@@ -15,11 +15,9 @@ from OCP.BRepGProp import BRepGProp  # noqa: E402
 from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.ShapeFix import ShapeFix_Shape, ShapeFix_Solid  # noqa: E402
 from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain  # noqa: E402
-from OCP.TopAbs import TopAbs_SHELL  # noqa: E402
-from OCP.TopExp import TopExp_Explorer  # noqa: E402
-from OCP.TopoDS import TopoDS, TopoDS_Compound  # noqa: E402
+from OCP.TopoDS import TopoDS_Compound  # noqa: E402
 
-from .fidelity import count_free_edges, faces_of, shape_valid, shell_of  # noqa: E402
+from .fidelity import count_free_edges, faces_of, shape_valid, shell_of, shells_of  # noqa: E402
 from .pcurves import mend_pcurves  # noqa: E402
 
 logger = logging.getLogger(__name__)
@@ -29,14 +27,6 @@ __all__ = ["assemble"]
 #: Sewing tolerance factors tried in turn while a closed part keeps free edges (ShapeFix can
 #: split a closed edge next to its vertex; the sliver needs a wider sewing).
 RETRY_FACTORS = (1.0, 2.0, 4.0)
-
-
-def _shells(shape) -> list:
-    out, ex = [], TopExp_Explorer(shape, TopAbs_SHELL)
-    while ex.More():
-        out.append(TopoDS.Shell(ex.Current()))
-        ex.Next()
-    return out
 
 
 def _shell_of(faces):
@@ -156,7 +146,7 @@ def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True,
             break
         logger.info("sewing at %.3g left %d free edges; retrying wider", tol, free)
     info = {"free_edges_after_sewing": free, "solid": False, "sew_tol": tol, "valid": valid}
-    shells = _shells(shape)
+    shells = shells_of(shape)
     if not shells:  # sewing one face returns the face
         shells = [_shell_of(faces_of(shape))]
     if closed and info["free_edges_after_sewing"] == 0:

@@ -1664,3 +1664,36 @@ def test_a_stray_triangulation_node_is_put_back_on_its_surface():
     tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
     tri.SetNode(1, gp_Pnt(5.0, 5.0, 5.0))  # what the mesher left
     assert brep_fidelity(box, V, F)["hausdorff"] < 1e-9  # (6.93 with the node left)
+
+
+def test_bspline_projector_finds_the_nearest_point_with_its_sign():
+    """A B-spline face's Projector (the Gauss-Newton residual of vertex placement and edge
+    points) measures the signed distance along the surface normal: on a B-spline through a
+    quarter cylinder of radius 2, points at radius 2 + h are at distance +-h, the same nearest
+    points as OCC's default (gradient, minima and maxima) projection finds."""
+    from OCP.collections import Array2_gp_Pnt
+    from OCP.GeomAPI import GeomAPI_PointsToBSplineSurface, GeomAPI_ProjectPointOnSurf
+    from OCP.gp import gp_Pnt
+
+    from igl_heatseg.cad import geometry
+
+    n = 12
+    grid = Array2_gp_Pnt(1, n, 1, n)
+    for i, t in enumerate(np.linspace(0.0, 0.5 * math.pi, n)):
+        for j, z in enumerate(np.linspace(0.0, 1.0, n)):
+            grid.SetValue(i + 1, j + 1, gp_Pnt(2 * math.cos(t), 2 * math.sin(t), z))
+    geom = GeomAPI_PointsToBSplineSurface(grid, 3, 8).Surface()
+    rng = np.random.default_rng(7)
+    t, z, h = rng.uniform(0.1, 1.47, 300), rng.uniform(0.1, 0.9, 300), rng.uniform(-0.3, 0.3, 300)
+    P = np.c_[(2 + h) * np.cos(t), (2 + h) * np.sin(t), z]
+    d, N = geometry.Projector(None, geom).residual(P)
+    sign = np.sign(d[0] * h[0])  # the surface's normal points out of or into the cylinder
+    assert sign != 0 and np.abs(sign * d - h).max() < 1e-3  # (the B-spline's fit: 1e-3)
+    assert np.allclose(np.linalg.norm(N, axis=1), 1.0)
+    radial = np.c_[np.cos(t), np.sin(t), 0 * t]
+    assert np.abs(np.abs(np.einsum("ij,ij->i", N, radial)) - 1).max() < 1e-3
+    ref = GeomAPI_ProjectPointOnSurf()
+    ref.Init(geom, *geom.Bounds())
+    for q, dq in zip(P[::30], d[::30], strict=True):
+        ref.Perform(gp_Pnt(*map(float, q)))
+        assert abs(ref.LowerDistance() - abs(dq)) < 1e-9

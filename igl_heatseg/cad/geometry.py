@@ -219,7 +219,7 @@ class Projector:
             self._proj = GeomAPI_ProjectPointOnSurf()
             self._proj.Init(geom, *geom.Bounds())
             # the nearest point is a minimum: OCC's gradient search skips the maxima (the same
-            # projections on every tuning part; edge building 0.8-1.1 s faster on 30 s builds)
+            # model on 103 of 104 generated parts; edge building 0.8-1.1 s faster on 30 s builds)
             self._proj.SetExtremaFlag(Extrema_ExtFlag_MIN)
 
     def residual(self, P: np.ndarray):

@@ -115,22 +115,23 @@ def face_area(face) -> float:
     return float(props.Mass())
 
 
-def faces_of(shape) -> list:
-    """The faces of a shape, in exploration order."""
-    out, ex = [], TopExp_Explorer(shape, TopAbs_FACE)
+def _sub_shapes(shape, kind, cast) -> list:
+    """The sub-shapes of one kind, cast to their type, in exploration order."""
+    out, ex = [], TopExp_Explorer(shape, kind)
     while ex.More():
-        out.append(TopoDS.Face(ex.Current()))
+        out.append(cast(ex.Current()))
         ex.Next()
     return out
+
+
+def faces_of(shape) -> list:
+    """The faces of a shape, in exploration order."""
+    return _sub_shapes(shape, TopAbs_FACE, TopoDS.Face)
 
 
 def shells_of(shape) -> list:
     """The shells of a shape, in exploration order."""
-    out, ex = [], TopExp_Explorer(shape, TopAbs_SHELL)
-    while ex.More():
-        out.append(TopoDS.Shell(ex.Current()))
-        ex.Next()
-    return out
+    return _sub_shapes(shape, TopAbs_SHELL, TopoDS.Shell)
 
 
 def shell_of(faces: list):

@@ -34,6 +34,25 @@ def test_triangles_across_an_edge_go_back_to_their_side():
     assert np.array_equal(labels, truth)
 
 
+def test_a_stray_no_neighbour_takes_stays():
+    # the +x side fitted by a plane parallel to +z (a recessed floor's plane): its faces stand
+    # across it, and across the +z, -z, +y and -y planes of the segments around them, so no
+    # neighbour takes them and nothing moves (before: each went to the neighbour whose face
+    # normal was nearest, and made that plane's segment unexplained)
+    V, F = cube(6)
+    labels, fits, FN = _sides(V, F)
+    fits[2] = Surface("plane", {"point": np.array([0.0, 0, -0.5]), "normal": np.array([0., 0, 1])})
+    before = labels.copy()
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    assert shed_strays(V, F, labels, fits, 0.01, TT, FN) == 0
+    assert np.array_equal(labels, before)
+    # a freeform neighbour takes them: the +z side unfitted, the border row of +x goes to it
+    fits[0] = Surface("freeform", {"centroid": np.array([0.0, 0, 1])})
+    assert shed_strays(V, F, labels, fits, 0.01, TT, FN) > 0
+    assert set(np.unique(before[labels != before]).tolist()) == {2}
+    assert set(np.unique(labels[labels != before]).tolist()) == {0}
+
+
 def test_noise_makes_no_strays():
     # noise of a fifth of an edge (the tolerance as the noise: half of it) tilts the normals,
     # not by 60 degrees: nothing moves

@@ -105,15 +105,32 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
     return out, moved
 
 
+def _stands_across(V, F, FN, faces, s, tol) -> np.ndarray:
+    """Which of ``faces`` stand across the analytic surface ``s`` (far and turned away)."""
+    return (corner_rms(V, F, faces, s) > STRAY_TOL * tol) & \
+        (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)
+
+
+def _takes(V, F, FN, f, s, tol) -> bool:
+    """A neighbouring segment fitted by ``s`` can take the stray face ``f``: it is freeform (or
+    unfitted), or the face does not stand across its surface too."""
+    return s is None or not s.is_analytic or not _stands_across(V, F, FN, np.array([f]), s,
+                                                                tol)[0]
+
+
 def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: float,
                 TT: np.ndarray, FN: np.ndarray) -> int:
     """Move, in place, the stray border faces of analytic segments to the neighbouring
-    segment across their edge whose face's normal is nearest to theirs.
+    segment across their edge whose face's normal is nearest to theirs, among those that take
+    them.
 
     A face on a segment's border is a stray when its normal is more than STRAY_ANGLE from
     its surface's normal and its corners' RMS distance to the surface is above STRAY_TOL
     ``tol``: it stands across the surface (a flank triangle on a side plane), which noise
-    does not do. A segment is never emptied nor cut apart (then its strays stay).
+    does not do. A neighbour takes a stray when it is freeform or the stray does not stand
+    across its surface too (a triangle of a recessed floor between two walls stays: given to
+    the wall across the way, it made a noisy housing's 850-face plane freeform). A segment is
+    never emptied nor cut apart (then its strays stay).
 
     Parameters
     ----------
@@ -160,15 +177,15 @@ def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, to
             if s is None or not s.is_analytic:
                 continue
             sel = border[labels[border] == k]
-            far = (corner_rms(V, F, sel, s) > STRAY_TOL * tol) & \
-                (normal_angle(V, F, FN, sel, s) > STRAY_ANGLE)
-            strays.extend(sel[far].tolist())
+            strays.extend(sel[_stands_across(V, F, FN, sel, s, tol)].tolist())
         if not strays:
             break
         new = labels.copy()
         for f in strays:
             js = TT[f][other[f]]
-            new[f] = labels[js[np.argmax(FN[js] @ FN[f])]]
+            js = js[[_takes(V, F, FN, f, fits.get(int(labels[j])), tol) for j in js]]
+            if len(js):
+                new[f] = labels[js[np.argmax(FN[js] @ FN[f])]]
         counts = np.bincount(new, minlength=labels.max() + 1)
         for k in np.flatnonzero((counts == 0) & (np.bincount(labels, minlength=len(counts)) > 0)):
             new[labels == k] = k  # never empty a segment

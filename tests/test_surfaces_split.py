@@ -92,3 +92,25 @@ def test_ransac_regions_are_deterministic_and_cover_every_face():
     b = ransac_regions(V, F, faces, tol, FN, TT)
     assert np.array_equal(a, b)
     assert a.min() == 0 and np.array_equal(np.unique(a), np.arange(a.max() + 1))
+
+
+def test_fold_weak_keeps_a_piece_its_surface():
+    # a hole's wall grown as one piece, and the triangles of the plane along its rim left over
+    # by the growth one by one: folded into the wall they made it freeform (a noisy plate's
+    # holes, tuning plate_s1001); they stay pieces of their own, the wall keeps its cylinder
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+    from igl_heatseg.surfaces.split import fold_weak
+
+    V, F, truth = hole_in_plane(noise=0.01, seed=3)
+    tol = 0.05
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = face_normals(V, F)
+    wall = np.flatnonzero(truth == 0)
+    rim = np.flatnonzero((truth == 1) & (TT >= 0).all(axis=1) &
+                         (truth[np.maximum(TT, 0)] == 0).any(axis=1))
+    parts = [wall] + [rim[i:i + 1] for i in range(len(rim))]
+    fits = [fit_faces(V, F, p, tol, FN=FN) for p in parts]
+    assert fits[0].kind == "cylinder"
+    out, out_fits = fold_weak(V, F, TT, tol, None, FN, parts, fits)
+    assert np.array_equal(np.sort(out[0]), wall) and out_fits[0].kind == "cylinder"
+    assert len(out) == 1 + len(rim)

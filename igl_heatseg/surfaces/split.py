@@ -285,7 +285,9 @@ def evidence(F, part, s) -> bool:
 def fold_weak(V, F, TT, tol, W, FN, parts, part_fits, keep_explained=False):
     """Pieces of a split of a noisy segment whose fit is no evidence (:func:`evidence`; the
     leftovers of region growing along a noisy crease) join the adjacent piece they share most
-    edges with, smallest first; the pieces that grew are refitted. With ``keep_explained`` (a
+    edges with, smallest first; the pieces that grew are refitted, and a piece that its surface
+    explained and no longer does with them gives them back (they stay pieces: four triangles of
+    a noisy plate made its hole's wall freeform). With ``keep_explained`` (a
     RANSAC split), a piece that its fit explains stays (a region of a few faces of a plane, which
     the merges then join to the rest of its plane) unless it has fewer than MIN_REGION_FACES
     faces, which no fit makes evidence (one face lies on any plane): such a piece joins the
@@ -300,7 +302,9 @@ def fold_weak(V, F, TT, tol, W, FN, parts, part_fits, keep_explained=False):
     piece = np.full(len(F), -1, dtype=np.int64)
     for r, part in enumerate(parts):
         piece[part] = r
-    grown = set()
+    grown: set = set()
+    folded: dict = {}  # piece -> the pieces folded into it
+    parts, part_fits = list(parts), list(part_fits)
     alive = len(parts)  # pieces not folded yet (every piece has faces)
     for r in sorted(range(len(parts)), key=lambda r: len(parts[r])):
         if alive <= 1:
@@ -319,14 +323,26 @@ def fold_weak(V, F, TT, tol, W, FN, parts, part_fits, keep_explained=False):
                     for c in np.unique(nb) if part_fits[c].is_analytic}
             j = min(near, key=near.get) if near else j
         piece[parts[r]] = j
+        folded.setdefault(j, []).append(parts[r])  # (with what was folded into it)
+        folded.pop(r, None)
+        grown.discard(r)
         parts[j] = np.concatenate([parts[j], parts[r]])
         parts[r] = parts[r][:0]
         grown.add(j)
         alive -= 1
+    for j in sorted(grown):
+        fits_j = fit_faces(V, F, parts[j], tol, W=W, FN=FN)
+        if explains(fits_j, tol) or not explains(part_fits[j], tol):
+            part_fits[j] = fits_j
+            continue
+        # the folded pieces cost the piece its surface: they stay pieces of their own
+        # (a cylinder wall of 50 faces with four shards of the plane around it: freeform)
+        for q in folded[j]:
+            parts[j] = parts[j][~np.isin(parts[j], q)]
+            parts.append(q)
+            part_fits.append(fit_faces(V, F, q, tol, W=W, FN=FN))
     keep = [r for r in range(len(parts)) if len(parts[r])]
-    fits = [fit_faces(V, F, parts[r], tol, W=W, FN=FN) if r in grown else part_fits[r]
-            for r in keep]
-    return [parts[r] for r in keep], fits
+    return [parts[r] for r in keep], [part_fits[r] for r in keep]
 
 
 def real_split(V, F, parts, part_fits, tol, ratio=None, noisy=False) -> bool:

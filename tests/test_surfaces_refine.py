@@ -318,3 +318,29 @@ def test_merging_finds_each_segments_measured_vertices_once(monkeypatch):
     plain = run()
     assert plain[0] == cached[0] and np.array_equal(plain[1], cached[1])
     assert plain[2] == cached[2]
+
+
+def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
+    # one triangle of a noisy plane, at a vertex that stands off it (a noise spike), is a
+    # segment of its own: off the plane by more than growth allows, and fitted exactly by its
+    # own plane, which one triangle always is. On a noisy mesh it joins the plane, whose fit
+    # still explains it; on an exact tessellation it stays (there it can be a true face)
+    from igl_heatseg.mesh.geometry import face_normals
+    from igl_heatseg.surfaces.refine import _absorb_shards
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+    from meshes import grid
+
+    V, F = grid(60, 60)
+    V = np.c_[V[:, :2], np.random.default_rng(0).normal(scale=0.002, size=len(V))]
+    spike = np.argmin(np.linalg.norm(V[:, :2] - V[:, :2].mean(axis=0), axis=1))
+    V[spike, 2] = 0.04
+    labels = np.zeros(len(F), dtype=np.int64)
+    labels[np.flatnonzero((F == spike).any(axis=1))[0]] = 1
+    tol = 0.01
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = face_normals(V, F)
+    fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, FN=FN) for k in (0, 1)}
+    assert fits[0].kind == "plane" and fits[0].rms <= tol
+    assert np.array_equal(_absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
+    out = _absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
+    assert (out == 0).all()

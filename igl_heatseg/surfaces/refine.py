@@ -114,6 +114,13 @@ CORE_EXPLAINS = 0.85
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
 
+#: ... and on a noisy mesh a segment of fewer than MIN_REGION_FACES faces and under this share
+#: of the mesh's area joins a neighbour that then still fits one surface. Set from face counts,
+#: not scores: a dense mesh's triangle is 3e-5 - 2e-4 of its area (5k - 30k faces), where one
+#: or two faces are never a face of the part; a coarse export's is 1e-3 - 2e-3 (500 - 1,000
+#: faces), where a chamfer can be two triangles.
+SHARD_AREA = 5e-4
+
 #: On a noisy mesh a segment whose surface explains it (RMS within tol) but fits worse than
 #: this x tol fits worse than the merges accept of a union (the noise level tol / K_NOISE times
 #: MERGE_NOISE_RATIO, plus MERGE_NOISE_SLACK x tol): two faces joined smoothly that the heat
@@ -391,14 +398,18 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
     return changed
 
 
-def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
+def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
+                   exact=True) -> np.ndarray:
     """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
     RMS within GROW_TOL x tol, normals agreeing) join it; unexplained ones of fewer than
     MIN_REGION_FACES faces join the nearest neighbour whatever the distance. A true small face
     (a chamfer two triangles wide) is off its neighbours' surfaces and explained by its own: it
-    stays."""
+    stays. On a noisy mesh (not ``exact``) a segment of fewer than MIN_REGION_FACES faces,
+    whose fit is no evidence, also joins the nearest neighbour that one surface then still
+    explains with it (the shards a split leaves of a small face cut up by the noise)."""
     labels = labels.copy()
     counts = np.bincount(labels)
+    total = float(face_areas(V, F).sum())
     for k in np.flatnonzero((counts > 0) & (counts < SHARD_FACES)).tolist():
         faces = np.flatnonzero(labels == k)
         nb = np.unique(labels[TT[faces][TT[faces] >= 0]])
@@ -411,6 +422,17 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN) -> np.ndarray:
         on = d[j] <= GROW_TOL * tol and normals_agree(V, F, FN, faces, fits[nb[j]])
         if on or tiny:
             labels[faces] = nb[j]
+        elif not exact and len(faces) < MIN_REGION_FACES and \
+                face_areas(V, F[faces]).sum() < SHARD_AREA * total:
+            for i in np.argsort(d).tolist():
+                if not explains(fits[nb[i]], tol):
+                    continue
+                union = np.r_[np.flatnonzero(labels == nb[i]), faces]
+                u = fit_faces(V, F, union, tol, W=W, FN=FN)
+                if explains(u, tol):
+                    labels[faces] = nb[i]
+                    fits[nb[i]] = u
+                    break
     return labels
 
 
@@ -668,7 +690,7 @@ def refine_segmentation(
                    if merge else 0)
     timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
-    labels = _absorb_shards(V, F, labels, fits, tol, TT, FN)
+    labels = _absorb_shards(V, F, labels, fits, tol, TT, FN, W, exact)
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if exact:  # no segment of a CAD tessellation runs across a crease
         labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F))

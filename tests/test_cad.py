@@ -1282,6 +1282,44 @@ def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
     assert fid["hausdorff_mesh_to_brep"] < 1e-9
 
 
+def test_a_hole_in_a_face_tessellation_is_not_measured(monkeypatch):
+    # the top of a box meshed as a fine grid with a small hole at its centre (0.8 % of
+    # its area: not "short"): the mesh vertex at the centre measures about 0.1 to the hole's rim
+    # by the triangles, 0 by BRepExtrema, which confirms the farthest vertices
+    from OCP.BRepGProp import BRepGProp
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.GProp import GProp_GProps
+
+    from igl_heatseg.cad import fidelity
+
+    V, F, _ = box_mesh(4)
+    assert np.abs(V - [0, 0, 1]).sum(axis=1).min() < 1e-12  # a vertex at the top's centre
+    box = BRepPrimAPI_MakeBox(gp_Pnt(-1, -1, -1), 2.0, 2.0, 2.0).Shape()
+
+    def centre_z(face):
+        props = GProp_GProps()
+        BRepGProp.SurfaceProperties_s(face, props)
+        return props.CentreOfMass().Z()
+
+    top = [f for f in faces_of(box) if centre_z(f) > 0.99]
+    x = np.linspace(-1.0, 1.0, 41)
+    gx, gy = np.meshgrid(x, x, indexing="ij")
+    P = np.c_[gx.ravel(), gy.ravel(), np.ones(gx.size)]
+    i = np.arange(41 * 41).reshape(41, 41)[:-1, :-1].ravel()
+    T = np.r_[np.c_[i, i + 41, i + 42], np.c_[i, i + 42, i + 1]]
+    T = T[np.linalg.norm(P[T].mean(axis=1)[:, :2], axis=1) > 0.1]
+    assert 0.0 < 1.0 - 0.00125 * len(T) / 4.0 < 0.9 * fidelity.TESSELLATION_SHORT
+    real = fidelity._face_triangles
+    monkeypatch.setattr(fidelity, "_face_triangles",
+                        lambda face, d: (P, T) if face.IsSame(top[0]) else real(face, d))
+    fid = brep_fidelity(box, V, F)
+    assert fid["faces_not_tessellated"] == 0
+    assert fid["hausdorff_mesh_to_brep"] < 1e-9
+    monkeypatch.setattr(fidelity, "CONFIRM_DISTANCE_MAX", 0)
+    assert brep_fidelity(box, V, F)["hausdorff_mesh_to_brep"] > 0.05
+
+
 def _wrong_side_plane():
     V, F, labels = box_mesh(3)
     surfs = box_planes()

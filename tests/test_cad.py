@@ -1255,13 +1255,12 @@ def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     assert np.allclose(cad_build._place_vertices(V, graph1, projs, ctx)[0], [1.0, 1.0, 1.0])
 
 
-def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
+def _box_and_top():
+    """The box mesh of ``box_mesh(4)``, the B-Rep box [-1, 1]^3 and its top face (z = 1)."""
     from OCP.BRepGProp import BRepGProp
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
     from OCP.gp import gp_Pnt
     from OCP.GProp import GProp_GProps
-
-    from igl_heatseg.cad import fidelity
 
     V, F, _ = box_mesh(4)
     box = BRepPrimAPI_MakeBox(gp_Pnt(-1, -1, -1), 2.0, 2.0, 2.0).Shape()
@@ -1273,6 +1272,13 @@ def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
 
     top = [f for f in faces_of(box) if centre_z(f) > 0.99]
     assert len(top) == 1
+    return V, F, box, top
+
+
+def test_untessellated_face_gets_exact_distances_to_itself(monkeypatch):
+    from igl_heatseg.cad import fidelity
+
+    V, F, box, top = _box_and_top()
     real = fidelity._face_triangles
     monkeypatch.setattr(fidelity, "_face_triangles",
                         lambda face, d: None if face.IsSame(top[0]) else real(face, d))
@@ -1286,23 +1292,10 @@ def test_a_hole_in_a_face_tessellation_is_not_measured(monkeypatch):
     # the top of a box meshed as a fine grid with a small hole at its centre (0.8 % of
     # its area: not "short"): the mesh vertex at the centre measures about 0.1 to the hole's rim
     # by the triangles, 0 by BRepExtrema, which confirms the farthest vertices
-    from OCP.BRepGProp import BRepGProp
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
-    from OCP.gp import gp_Pnt
-    from OCP.GProp import GProp_GProps
-
     from igl_heatseg.cad import fidelity
 
-    V, F, _ = box_mesh(4)
+    V, F, box, top = _box_and_top()
     assert np.abs(V - [0, 0, 1]).sum(axis=1).min() < 1e-12  # a vertex at the top's centre
-    box = BRepPrimAPI_MakeBox(gp_Pnt(-1, -1, -1), 2.0, 2.0, 2.0).Shape()
-
-    def centre_z(face):
-        props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(face, props)
-        return props.CentreOfMass().Z()
-
-    top = [f for f in faces_of(box) if centre_z(f) > 0.99]
     x = np.linspace(-1.0, 1.0, 41)
     gx, gy = np.meshgrid(x, x, indexing="ij")
     P = np.c_[gx.ravel(), gy.ravel(), np.ones(gx.size)]

@@ -325,10 +325,11 @@ def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     # segment of its own: off the plane by more than growth allows, and fitted exactly by its
     # own plane, which one triangle always is. On a noisy mesh it joins the plane, whose fit
     # still explains it; on an exact tessellation it stays (there it can be a true face)
-    from igl_heatseg.mesh.geometry import face_normals
-    from igl_heatseg.surfaces.refine import _absorb_shards
-    from igl_heatseg.surfaces.segment_fit import fit_faces
     from meshes import grid
+
+    from igl_heatseg.mesh.geometry import face_normals
+    from igl_heatseg.surfaces import refine
+    from igl_heatseg.surfaces.segment_fit import fit_faces
 
     V, F = grid(60, 60)
     V = np.c_[V[:, :2], np.random.default_rng(0).normal(scale=0.002, size=len(V))]
@@ -341,6 +342,6 @@ def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     FN = face_normals(V, F)
     fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, FN=FN) for k in (0, 1)}
     assert fits[0].kind == "plane" and fits[0].rms <= tol
-    assert np.array_equal(_absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
-    out = _absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
+    assert np.array_equal(refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
+    out = refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
     assert (out == 0).all()

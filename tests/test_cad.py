@@ -1313,6 +1313,26 @@ def test_a_hole_in_a_face_tessellation_is_not_measured(monkeypatch):
     assert brep_fidelity(box, V, F)["hausdorff_mesh_to_brep"] > 0.05
 
 
+def test_confirmed_distances_bound_their_neighbours():
+    """A hole in a face's tessellation under more vertices than the confirmations: each exact
+    distance found bounds its neighbours' (triangle inequality), so a few confirmations
+    measure the whole hole (here 21 vertices, 3 confirmations)."""
+    from igl_heatseg.cad.fidelity import _farthest_first
+
+    x = np.linspace(0.0, 1.0, 101)
+    V = np.c_[x, np.zeros((101, 2))]
+    hole = (x >= 0.4 - 1e-9) & (x <= 0.6 + 1e-9)
+    d = np.where(hole, 0.1, 0.001)  # the tessellation's distances; exactly 0 in the hole
+
+    def closer(i, r):
+        return 0.0 if hole[i] else r
+
+    assert _farthest_first(d, 3, 0.0, closer).max() == pytest.approx(0.1)
+    bounded = _farthest_first(d, 3, 0.0, closer, V)
+    assert bounded.max() <= 0.05 + 1e-12 and np.all(bounded >= 0.0)
+    assert np.all(bounded[~hole] == d[~hole])
+
+
 def _wrong_side_plane():
     V, F, labels = box_mesh(3)
     surfs = box_planes()

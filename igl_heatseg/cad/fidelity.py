@@ -7,6 +7,7 @@ import math
 
 import igl
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..mesh.geometry import face_areas
 from ..surfaces.tolerance import exact_tessellation
@@ -570,20 +571,33 @@ def _exact_distances(V, d, faces, floor: float, limit: int = EXACT_DISTANCE_MAX,
                     best = min(best, dist.Value())
         return best
 
-    return _farthest_first(d, limit, floor, closer)
+    return _farthest_first(d, limit, floor, closer, V)
 
 
-def _farthest_first(d: np.ndarray, limit: int, floor: float, closer) -> np.ndarray:
+def _farthest_first(d: np.ndarray, limit: int, floor: float, closer, V=None) -> np.ndarray:
     """``d`` (n,) with ``d[i]`` lowered to ``closer(i, d[i])`` (a distance, inf for none) for
     the largest distances first, until the next one (or ``floor``) cannot raise the maximum:
-    at most ``limit`` of them."""
+    at most ``limit`` of them. With the positions ``V`` (n, 3), each distance found also bounds
+    its neighbours' (``d[j] <= d[i] + |V[j] - V[i]|``), so that a hole in a face's
+    tessellation under more than ``limit`` vertices of a dense mesh (116 of a true part's
+    vertices under a sprocket's face, measured 2.15 % of the diagonal off for 0.01 %) is
+    measured by a few of them: the maximum stays an upper bound of the exact one."""
     d = d.copy()
+    done = np.zeros(len(d), dtype=bool)
+    tree = None
     top = 0.0
-    for i in np.argsort(d)[::-1][:limit]:
-        if d[i] <= max(floor, top):
+    for _ in range(min(limit, len(d))):
+        i = int(np.argmax(np.where(done, -np.inf, d)))
+        if done[i] or d[i] <= max(floor, top):
             break
-        d[i] = min(d[i], closer(int(i), float(d[i])))
+        r = float(d[i])
+        d[i], done[i] = min(r, closer(i, r)), True
         top = max(top, d[i])
+        if V is not None and d[i] < r:  # a closer point than the tessellation said
+            tree = tree if tree is not None else cKDTree(V)
+            near = np.asarray(tree.query_ball_point(V[i], r - d[i]), dtype=np.int64)
+            if len(near):
+                d[near] = np.minimum(d[near], d[i] + np.linalg.norm(V[near] - V[i], axis=1))
     return d
 
 

@@ -11,6 +11,7 @@ import pytest
 
 pytest.importorskip("OCP")
 
+from meshes import grid  # noqa: E402
 from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.GeomAbs import GeomAbs_SurfaceType  # noqa: E402
 
@@ -1231,6 +1232,94 @@ def test_edge_curve_of_a_smooth_chain_stays_a_smooth_spline():
     assert polyline_distance(Q, P).max() < 2e-3  # the chords' sagitta, not ringing
 
 
+def _tangent_join():
+    """A noisy flat grid whose right half turns up by 3 degrees at x = 0, and two planes
+    fitted to it that pass each other by 0.002 there (midway: z = 0.001)."""
+    V, F = grid(40, 20, 2.0, 1.0)
+    V[:, 0] -= 1.0
+    slope = math.tan(math.radians(3.0))
+    V[:, 2] = np.where(V[:, 0] > 0, slope * V[:, 0], 0.0)
+    labels = (V[F].mean(axis=1)[:, 0] > 0).astype(np.int64)
+    V = V + np.random.default_rng(5).normal(scale=0.01, size=V.shape) * [0, 0, 1]
+    up = np.array([-slope, 0.0, 1.0]) / math.hypot(slope, 1.0)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": Z}, rms=0.01, max_dev=0.04),
+             Surface("plane", {"point": np.array([0, 0, 0.002]), "normal": up}, rms=0.01,
+                     max_dev=0.04)]
+    return V, F, labels, surfs
+
+
+def _join_edge_offset(shape) -> float:
+    """Largest distance of the shared edge near x = 0 from the planes' midway line."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    worst = 0.0
+    ex = TopExp_Explorer(shape, TopAbs_EDGE)
+    while ex.More():
+        c = BRepAdaptor_Curve(TopoDS.Edge(ex.Current()))
+        Q = np.array([[q.X(), q.Y(), q.Z()] for q in (
+            c.Value(float(t)) for t in np.linspace(c.FirstParameter(), c.LastParameter(), 200))])
+        if np.abs(Q[:, 0]).max() < 0.1:
+            worst = max(worst, np.abs(Q[:, 2] - 0.001).max())
+        ex.Next()
+    return worst
+
+
+def test_edge_of_a_noisy_tangent_join_runs_between_its_surfaces():
+    """Two faces meeting at a slight angle (a tangent join, as a fillet's torus into its
+    cylinder), whose fitted surfaces pass each other by a little on noise: no sample of their
+    shared edge has a common point within the curve tolerance. The edge went through the
+    noisy mesh vertices (0.015 off the surfaces' midway line at noise 0.01), and a corner stayed
+    at its noisy mesh vertex; both now lie midway between the two surfaces."""
+    V, F, labels, surfs = _tangent_join()
+    res = build_brep(V, F, labels, surfs, tol=0.05)
+    assert res.fidelity["valid"] and [f["built_as"] for f in res.faces] == ["plane", "plane"]
+    assert _join_edge_offset(res.shape) < 0.002
+
+
+def test_face_invalid_with_edge_points_between_surfaces_is_built_again_through_the_mesh(
+        monkeypatch):
+    """A sewn face found invalid next to edge points settled between two surfaces is built
+    again with those points on the mesh before it is faceted (here it is then valid)."""
+    import igl_heatseg.cad.build as build_mod
+
+    real, calls = build_mod._invalid_segments, []
+
+    def first_invalid(shape, faces, *args):
+        calls.append(len(faces))
+        return [1] if len(calls) == 1 else real(shape, faces, *args)
+
+    monkeypatch.setattr(build_mod, "_invalid_segments", first_invalid)
+    V, F, labels, surfs = _tangent_join()
+    res = build_brep(V, F, labels, surfs, tol=0.05)
+    assert calls == [2, 2]  # built again, not faceted
+    assert [f["status"] for f in res.faces] == ["built", "built"] and res.fidelity["valid"]
+    assert _join_edge_offset(res.shape) > 0.005  # through the noisy mesh this time
+
+
+def test_trimmed_face_invalid_with_edge_points_between_surfaces_is_built_again(monkeypatch):
+    """The same before sewing: a trimmed face that fails BRepCheck next to edge points
+    settled between two surfaces is built again with those points on the mesh."""
+    import igl_heatseg.cad.build as build_mod
+
+    real, tries = build_mod._face, []
+
+    def first_invalid(a, *args):
+        if a == 1:
+            tries.append(a)
+            if len(tries) == 1:
+                return None, build_mod.INVALID_TRIM
+        return real(a, *args)
+
+    monkeypatch.setattr(build_mod, "_face", first_invalid)
+    V, F, labels, surfs = _tangent_join()
+    res = build_brep(V, F, labels, surfs, tol=0.05)
+    assert len(tries) == 2 and [f["status"] for f in res.faces] == ["built", "built"]
+    assert _join_edge_offset(res.shape) > 0.005
+
+
 def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     """A chain of one mesh edge between two corners with the same three surfaces around them:
     both corners project onto the surfaces' one common point, which left a null edge
@@ -1245,7 +1334,7 @@ def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     projs = [geometry.Projector(s, geometry.occ_surface(s)) for s in planes]
     graph = BoundaryGraph(chains=[Chain(np.array([0, 1]), 0, 1)], loops=[[], [], []],
                           corners=np.array([0, 1]), vertex_sides={0: (0, 1, 2), 1: (0, 1, 2)})
-    ctx = {"curve_tol": 1e-4, "devs": [0.0, 0.0, 0.0], "mean_edge": 0.1}
+    ctx = {"curve_tol": 1e-4, "devs": [0.0, 0.0, 0.0], "mean_edge": 0.1, "noisy": False}
     pos = cad_build._place_vertices(V, graph, projs, ctx)
     assert np.linalg.norm(pos[0] - pos[1]) > ctx["curve_tol"]
     assert np.allclose(pos[0], V[0]) and np.allclose(pos[1], V[1])

@@ -25,6 +25,7 @@ from igl_heatseg.errors import MeshError
 from igl_heatseg.mesh.topology import edge_topology, face_components
 from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
+from igl_heatseg.surfaces.tolerance import exact_tessellation
 
 from ._ocp import require_ocp
 
@@ -114,6 +115,12 @@ SEW_MAX_EDGE = 0.5
 #: (when that does not give a valid solid, the first open shell is written). A build that
 #: leaves out faceted triangles sewing closed up (:func:`~.blame.collapsed`) is one more.
 MAX_REBUILDS = 2
+#: Builds more (besides MAX_REBUILDS) with the edge points next to segments whose sewn faces
+#: failed BRepCheck or kept free edges put back on the mesh
+#: (:func:`~.geometry.settle_on_surfaces`), before those segments are faceted.
+STRICT_REBUILDS = 2
+#: The reason of a segment faceted because its trimmed face failed BRepCheck.
+INVALID_TRIM = "trimmed face is not valid (BRepCheck)"
 
 #: Smallest tolerance relative to the bbox diagonal (OCC's Precision::Confusion is 1e-7 on
 #: ~1-unit parts; we keep a margin above it).
@@ -133,19 +140,27 @@ def _place_vertices(V, graph, projs, ctx):
         ps = [projs[s] for s in graph.vertex_sides[v] if s >= 0 and projs[s] is not None]
         X = V[v]
         if ps:
-            Y, res = geometry.onto_surfaces(V[v][None], ps)
-            if res[0] <= ctx["curve_tol"] and \
-                    np.linalg.norm(Y[0] - V[v]) <= _move_limit(ctx, graph.vertex_sides[v]):
-                X = Y[0]
-            else:
-                logger.debug("vertex %d: surfaces ill-conditioned (res %.3g), mesh vertex", v,
-                             res[0])
+            sides = graph.vertex_sides[v]
+            Y, moved, between = geometry.settle_on_surfaces(
+                V[v][None], ps, ctx["curve_tol"], _move_limit(ctx, sides), _between(ctx, sides))
+            X = Y[0]
+            if between[0]:
+                ctx["between"].update(s for s in sides if s >= 0)
+            elif not moved[0]:
+                logger.debug("vertex %d: surfaces ill-conditioned, mesh vertex", v)
         pos[v] = X
     for ch in graph.chains:  # two corners moved onto one point would make a null edge
         a, b = int(ch.verts[0]), int(ch.verts[-1])
         if a != b and np.linalg.norm(pos[a] - pos[b]) <= ctx["curve_tol"]:
             pos[a], pos[b] = V[a], V[b]
     return pos
+
+
+def _between(ctx, sides) -> bool:
+    """Whether points of a noisy mesh may settle between surfaces that do not meet
+    (:func:`~.geometry.settle_on_surfaces`): not next to a segment whose sewn face came out
+    invalid with such points (``ctx["strict"]``)."""
+    return ctx["noisy"] and not any(s in ctx["strict"] for s in sides)
 
 
 def _move_limit(ctx, sides) -> float:
@@ -183,7 +198,8 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
     sides = (chain.left, chain.right)
     ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
     a, b, limit = int(chain.verts[0]), int(chain.verts[-1]), _move_limit(ctx, sides)
-    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(), limit,
+    between = _between(ctx, sides)
+    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(), limit, between,
            *(projs[s] if s >= 0 else None for s in sides))
     cache = ctx.setdefault("point_cache", {})
     if key not in cache:
@@ -192,13 +208,14 @@ def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
         if R is None:
             P[0], P[-1] = pos[a], pos[b]
         lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
+        moved = np.zeros(0, dtype=bool)
         if ps and len(P) > 2:
-            X, res = geometry.onto_surfaces(P[lo:len(P) - lo], ps)
-            ok = (res <= ctx["curve_tol"]) & (np.linalg.norm(X - P[lo:len(P) - lo], axis=1)
-                                              <= limit)
-            P[lo:len(P) - lo] = np.where(ok[:, None], X, P[lo:len(P) - lo])
-        cache[key] = P, orig, R is not None
-    P, orig, restarted = cache[key]
+            P[lo:len(P) - lo], _, moved = geometry.settle_on_surfaces(
+                P[lo:len(P) - lo], ps, ctx["curve_tol"], limit, between)
+        cache[key] = P, orig, R is not None, bool(moved.any())
+    P, orig, restarted, between = cache[key]
+    if between:
+        ctx["between"].update(s for s in sides if s >= 0)
     P = P.copy()
     if not restarted:
         snap[chain.verts] = P[orig]
@@ -373,7 +390,7 @@ def _face(a, geom, loops, edges, ctx, seg_area, seg_points):
         fix.Perform()
         fixed = fix.Shape()
         if fixed.ShapeType() != TopAbs_FACE or not BRepCheck_Analyzer(fixed).IsValid():
-            return None, "trimmed face is not valid (BRepCheck)"
+            return None, INVALID_TRIM
         face = TopoDS.Face(fixed)
     if ctx["surfaces"][a].kind == "freeform":  # a B-spline runs on past its chart
         if "mesh_tree" not in ctx:  # one tree for every B-spline face of every rebuild
@@ -414,7 +431,8 @@ def _tolerances(V, F, surfaces, tol):
     tol = max(float(tol), MIN_TOL_REL * diag)
     curve_tol = max(CURVE_TOL_FRACTION * tol, MIN_TOL_REL * diag)
     return {"tol": tol, "curve_tol": curve_tol, "vertex_tol": max(MIN_TOL_REL * diag, 1e-7),
-            "diag": diag, "mean_edge": mean_edge}
+            "diag": diag, "mean_edge": mean_edge, "noisy": not exact_tessellation(V, F),
+            "strict": set(), "between": set()}
 
 
 def _sew_tolerance(ctx, devs) -> float:
@@ -602,8 +620,11 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
     kept = None  # the first valid open shell, kept in case faceting does not close it
     dropped = ctx.setdefault("dropped", set())  # faceted triangles sewing closed up: left out
     extra = False  # whether a build went to leaving them out (besides MAX_REBUILDS)
+    strict = 0  # builds that went to edge points on the mesh (besides MAX_REBUILDS)
     try:
-        for attempt in range(MAX_REBUILDS + 2):  # (one more when triangles were left out)
+        # (one more when triangles were left out, up to STRICT_REBUILDS for edge points on
+        # the mesh)
+        for attempt in range(MAX_REBUILDS + 2 + STRICT_REBUILDS):
             if attempt and ctx["limit"].out_of_time(f"rebuild {attempt} (segments "
                                                     f"{sorted(skip)} faceted)"):
                 if kept is None:
@@ -611,7 +632,7 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                                        "limit left no time to facet its invalid faces")
                 shape, info, status, skip = kept
                 break
-            attempt -= extra
+            attempt -= extra + strict
             faces, status, sew_tol, owner = _build_faces(V, F, labels, surfaces, uv, ctx,
                                                          timings, progress, skip, cache)
             t = time.perf_counter()
@@ -634,9 +655,27 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                 extra = True
                 skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
                 continue
+            retry = set(bad or ()) & ctx["between"]
+            if retry and strict < STRICT_REBUILDS:
+                # a sewn face is invalid with edge points between its surfaces and its
+                # neighbours': built again with those points on the mesh before faceting it
+                logger.warning("sewn faces of segments %s are invalid (BRepCheck); building "
+                               "their edges again through the mesh", sorted(retry))
+                ctx["strict"] |= retry
+                strict += 1
+                continue
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours, ctx["touching"],
                                       ctx["narrowed"])
+                retry = set(gaps) & ctx["between"]
+                if retry and strict < STRICT_REBUILDS:  # the same for free edges
+                    logger.warning("the shell keeps %d free edge(s) along segments %s; building"
+                                   " their edges again through the mesh",
+                                   info["free_edges_after_sewing"], sorted(retry))
+                    kept = kept or (shape, info, status, dict(skip))
+                    ctx["strict"] |= retry
+                    strict += 1
+                    continue
                 if gaps:
                     logger.warning("the shell keeps %d free edge(s) along segments %s; "
                                    "faceting them", info["free_edges_after_sewing"],
@@ -696,9 +735,10 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     the segment of each face). Segments in ``skip`` (index -> reason) are faceted; ``cache``
     keeps the surfaces between calls (key: segment, and whether an analytic one may become a
     B-spline); ``timings`` adds up over the calls."""
-    k = len(surfaces)
+    k, given = len(surfaces), surfaces
     skip = {} if skip is None else skip
     cache = {} if cache is None else cache
+    ctx["between"] = set()  # the segments with edge points between their surfaces
     t = time.perf_counter()
     graph = boundary_graph(V, F, labels, k)
     seg_faces = [np.flatnonzero(labels == a) for a in range(k)]
@@ -793,4 +833,11 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                            why_bspline=ctx["notes"].get(a) if built_as[a] == "bspline" and
                            face is not None and ctx["fitted"][a].is_analytic else None))
     timings["faces"] = timings.get("faces", 0.0) + time.perf_counter() - t
+    retry = {a for a, st in enumerate(status) if st["status"] == "faceted" and str(
+        st["reason"]).startswith(INVALID_TRIM)} & ctx["between"] - ctx["strict"]
+    if retry:  # their edges through points between surfaces: again through the mesh
+        logger.warning("trimmed faces of segments %s are invalid; building their edges again "
+                       "through the mesh", sorted(retry))
+        ctx["strict"] |= retry
+        return _build_faces(V, F, labels, given, uv, ctx, timings, progress, skip, cache)
     return faces, status, ctx["sew_tol"], owner

@@ -811,8 +811,10 @@ def test_segment_invalid_after_sewing_is_faceted_and_the_model_rebuilt(monkeypat
         return {2} if len(calls) == 1 else real(shape, faces, *args)
 
     monkeypatch.setattr(build_mod, "_invalid_segments", first_side_invalid)
-    moved, samples = [], build_mod._samples
-    monkeypatch.setattr(build_mod, "_samples", lambda P: moved.append(len(P)) or samples(P))
+    from igl_heatseg.cad import points
+
+    moved, samples = [], points._samples
+    monkeypatch.setattr(points, "_samples", lambda P: moved.append(len(P)) or samples(P))
     V, F, labels = box_mesh(2)
     res = build_brep(V, F, labels, box_planes())
     assert calls == [6, 5 + 8]  # one rebuild: side 2 as its 8 triangles
@@ -1325,8 +1327,7 @@ def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     both corners project onto the surfaces' one common point, which left a null edge
     (MakeEdge: DifferentPointsOnClosedCurve) and the whole model faceted (paper mode on a
     tuning block). Both corners now stay at their mesh positions."""
-    from igl_heatseg.cad import build as cad_build
-    from igl_heatseg.cad import geometry
+    from igl_heatseg.cad import geometry, points
     from igl_heatseg.cad.topology import BoundaryGraph, Chain
 
     V = np.array([[1.0, 1.0, 1.0 + 1e-3], [1.0 + 1e-3, 1.0, 1.0]])
@@ -1335,13 +1336,13 @@ def test_two_corners_moved_onto_one_point_stay_at_the_mesh():
     graph = BoundaryGraph(chains=[Chain(np.array([0, 1]), 0, 1)], loops=[[], [], []],
                           corners=np.array([0, 1]), vertex_sides={0: (0, 1, 2), 1: (0, 1, 2)})
     ctx = {"curve_tol": 1e-4, "devs": [0.0, 0.0, 0.0], "mean_edge": 0.1, "noisy": False}
-    pos = cad_build._place_vertices(V, graph, projs, ctx)
+    pos = points.place_vertices(V, graph, projs, ctx)
     assert np.linalg.norm(pos[0] - pos[1]) > ctx["curve_tol"]
     assert np.allclose(pos[0], V[0]) and np.allclose(pos[1], V[1])
     # a single corner still moves onto the surfaces
     graph1 = BoundaryGraph(chains=[], loops=[[], [], []], corners=np.array([0]),
                            vertex_sides={0: (0, 1, 2)})
-    assert np.allclose(cad_build._place_vertices(V, graph1, projs, ctx)[0], [1.0, 1.0, 1.0])
+    assert np.allclose(points.place_vertices(V, graph1, projs, ctx)[0], [1.0, 1.0, 1.0])
 
 
 def _box_and_top():
@@ -1406,7 +1407,7 @@ def test_confirmed_distances_bound_their_neighbours():
     """A hole in a face's tessellation under more vertices than the confirmations: each exact
     distance found bounds its neighbours' (triangle inequality), so a few confirmations
     measure the whole hole (here 21 vertices, 3 confirmations)."""
-    from igl_heatseg.cad.fidelity import _farthest_first
+    from igl_heatseg.cad import fidelity
 
     x = np.linspace(0.0, 1.0, 101)
     V = np.c_[x, np.zeros((101, 2))]
@@ -1416,8 +1417,8 @@ def test_confirmed_distances_bound_their_neighbours():
     def closer(i, r):
         return 0.0 if hole[i] else r
 
-    assert _farthest_first(d, 3, 0.0, closer).max() == pytest.approx(0.1)
-    bounded = _farthest_first(d, 3, 0.0, closer, V)
+    assert fidelity._farthest_first(d, 3, 0.0, closer).max() == pytest.approx(0.1)
+    bounded = fidelity._farthest_first(d, 3, 0.0, closer, V)
     assert bounded.max() <= 0.05 + 1e-12 and np.all(bounded >= 0.0)
     assert np.all(bounded[~hole] == d[~hole])
 

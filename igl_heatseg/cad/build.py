@@ -23,7 +23,6 @@ import numpy as np
 
 from igl_heatseg.errors import MeshError
 from igl_heatseg.mesh.topology import edge_topology, face_components
-from igl_heatseg.surfaces.boundaries import move_limit
 from igl_heatseg.surfaces.model import Surface
 from igl_heatseg.surfaces.tolerance import exact_tessellation
 
@@ -38,7 +37,7 @@ from OCP.ShapeFix import ShapeFix_Face, ShapeFix_Shape  # noqa: E402
 from OCP.TopAbs import TopAbs_FACE  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Face, TopoDS_Vertex, TopoDS_Wire  # noqa: E402
 
-from . import faceted, geometry, periodic, surface_choice  # noqa: E402
+from . import faceted, geometry, periodic, points, surface_choice  # noqa: E402
 from .blame import invalid_segments as _invalid_segments  # noqa: E402
 from .blame import open_segments as _open_segments  # noqa: E402
 from .budget import TimeLimit  # noqa: E402
@@ -73,10 +72,6 @@ MISFIT_RMS_RATIO, MISFIT_RMS_FLOOR = 2.0, 0.05
 #: Edge curves (B-splines) approximate their points to this fraction of the tolerance, so
 #: curve error never dominates the fit error.
 CURVE_TOL_FRACTION = 1e-2
-
-#: Minimum number of samples along an edge before it is fitted (straight 2-vertex chains get
-#: midpoints, so that the intersection of curved surfaces is followed between mesh vertices).
-MIN_EDGE_SAMPLES = 24
 
 #: A trimmed face whose area differs from its segment's mesh area by more than this fraction
 #: was trimmed wrongly (complement chosen, loop lost) and is faceted instead.
@@ -131,103 +126,6 @@ def _vertex(builder, X, tol):
     v = TopoDS_Vertex()
     builder.MakeVertex(v, geometry._pnt(X), float(tol))
     return v
-
-
-def _place_vertices(V, graph, projs, ctx):
-    """B-Rep vertex positions (least-squares point of the good surfaces around each corner)."""
-    pos = {}
-    for v in graph.corners.tolist():
-        ps = [projs[s] for s in graph.vertex_sides[v] if s >= 0 and projs[s] is not None]
-        X = V[v]
-        if ps:
-            sides = graph.vertex_sides[v]
-            Y, moved, between = geometry.settle_on_surfaces(
-                V[v][None], ps, ctx["curve_tol"], _move_limit(ctx, sides), _between(ctx, sides))
-            X = Y[0]
-            if between[0]:
-                ctx["between"].update(s for s in sides if s >= 0)
-            elif not moved[0]:
-                logger.debug("vertex %d: surfaces ill-conditioned, mesh vertex", v)
-        pos[v] = X
-    for ch in graph.chains:  # two corners moved onto one point would make a null edge
-        a, b = int(ch.verts[0]), int(ch.verts[-1])
-        if a != b and np.linalg.norm(pos[a] - pos[b]) <= ctx["curve_tol"]:
-            pos[a], pos[b] = V[a], V[b]
-    return pos
-
-
-def _between(ctx, sides) -> bool:
-    """Whether points of a noisy mesh may settle between surfaces that do not meet
-    (:func:`~.geometry.settle_on_surfaces`): not next to a segment whose sewn face came out
-    invalid with such points (``ctx["strict"]``)."""
-    return ctx["noisy"] and not any(s in ctx["strict"] for s in sides)
-
-
-def _move_limit(ctx, sides) -> float:
-    """How far a boundary point may move onto its surfaces' intersection
-    (:func:`igl_heatseg.surfaces.boundaries.move_limit` of the built surfaces' deviations)."""
-    return move_limit([ctx["devs"][s] for s in sides if s >= 0], ctx["mean_edge"])
-
-
-def _samples(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Polyline subdivided to at least MIN_EDGE_SAMPLES points; index of each original point."""
-    nseg = len(P) - 1
-    s = max(1, math.ceil(MIN_EDGE_SAMPLES / nseg))
-    t = np.arange(s) / s
-    Q = (P[:-1, None, :] * (1 - t)[None, :, None] + P[1:, None, :] * t[None, :, None])
-    return np.vstack([Q.reshape(-1, 3), P[-1:]]), np.arange(nseg + 1) * s
-
-
-def _seam_polyline(chain, V, projs, ctx):
-    """A closed chain on a periodic surface restarted on that surface's seam (u = 0), so that
-    the seam ShapeFix_Face adds runs through the chain's vertex instead of splitting the
-    circle (near a mesh vertex that split leaves a sliver edge the sewing drops)."""
-    for side in (chain.left, chain.right):
-        if side < 0 or projs[side] is None:
-            continue
-        frame = geometry.seam_frame(ctx["surfaces"][side])
-        if frame is not None:
-            return geometry.start_at_seam(V[chain.verts], frame)
-    return None
-
-
-def _edge_points(chain, V, pos, projs, vertices, ctx, snap):
-    """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam).
-    Kept in ``ctx["point_cache"]`` by the chain, its ends' positions, its sides' surfaces and
-    how far it may move: a rebuild moves again only the chains where one of them changed."""
-    sides = (chain.left, chain.right)
-    ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
-    a, b, limit = int(chain.verts[0]), int(chain.verts[-1]), _move_limit(ctx, sides)
-    between = _between(ctx, sides)
-    key = (chain.verts.tobytes(), sides, pos[a].tobytes(), pos[b].tobytes(), limit, between,
-           *(projs[s] if s >= 0 else None for s in sides))
-    cache = ctx.setdefault("point_cache", {})
-    if key not in cache:
-        R = _seam_polyline(chain, V, projs, ctx) if chain.closed else None
-        P, orig = _samples(V[chain.verts] if R is None else R)
-        if R is None:
-            P[0], P[-1] = pos[a], pos[b]
-        lo = 1 if R is None else 0  # a restarted closed chain also moves its vertex
-        moved = np.zeros(0, dtype=bool)
-        if ps and len(P) > 2:
-            P[lo:len(P) - lo], _, moved = geometry.settle_on_surfaces(
-                P[lo:len(P) - lo], ps, ctx["curve_tol"], limit, between)
-        cache[key] = P, orig, R is not None, bool(moved.any())
-    P, orig, restarted, between = cache[key]
-    if between:
-        ctx["between"].update(s for s in sides if s >= 0)
-    P = P.copy()
-    if not restarted:
-        snap[chain.verts] = P[orig]
-    else:
-        P[-1] = P[0]
-        _move_vertex(a, P[0], pos, vertices, ctx)
-    return P
-
-
-def _move_vertex(vid, X, pos, vertices, ctx):
-    pos[vid] = np.asarray(X, dtype=np.float64)
-    ctx["builder"].UpdateVertex(vertices[vid], geometry._pnt(X), ctx["vertex_tol"])
 
 
 def _edge(chain, P, circle, pos, projs, vertices, ctx, snap):
@@ -329,7 +227,7 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
             if P is None:
                 return None, False
             ctx["chain_points"][c], start, circles[c] = P, P[0], None
-        _move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
+        points.move_vertex(int(graph.chains[c].verts[0]), start, pos, vertices, ctx)
     if plan is not None:
         plan["u0"] = u0
     return u0, plan is not None
@@ -778,14 +676,14 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     ctx["sew_tol"] = _sew_tolerance(ctx, [d for d, r in zip(devs, reasons, strict=True)
                                           if r is None])
     t = time.perf_counter()
-    pos = _place_vertices(V, graph, projs, ctx)
+    pos = points.place_vertices(V, graph, projs, ctx)
     ctx["pos"], ctx["chains"] = pos, graph.chains
     vertices = {v: _vertex(ctx["builder"], X, ctx["vertex_tol"]) for v, X in pos.items()}
     ctx["vtols"] = {}  # new vertices: the tolerances an earlier build raised are not theirs
     snap = V.copy()
     for v, X in pos.items():
         snap[v] = X
-    ctx["chain_points"] = [_edge_points(ch, V, pos, projs, vertices, ctx, snap)
+    ctx["chain_points"] = [points.edge_points(ch, V, pos, projs, vertices, ctx, snap)
                            for ch in graph.chains]
     plans, wraps, circles = _revolved_plans(graph, surfaces, projs,
                                             lambda a: V[np.unique(F[seg_faces[a]])], pos,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import heapq
 import logging
 import math
 
@@ -583,15 +584,19 @@ def _farthest_first(d: np.ndarray, limit: int, floor: float, closer, V=None) -> 
     vertices under a sprocket's face, measured 2.15 % of the diagonal off for 0.01 %) is
     measured by a few of them: the maximum stays an upper bound of the exact one."""
     d = d.copy()
-    done = np.zeros(len(d), dtype=bool)
+    heap = [(-x, i) for i, x in enumerate(d.tolist())]  # farthest first, lowest index on ties
+    heapq.heapify(heap)
     tree = None
-    top = 0.0
-    for _ in range(min(limit, len(d))):
-        i = int(np.argmax(np.where(done, -np.inf, d)))
-        if done[i] or d[i] <= max(floor, top):
+    top, measured = 0.0, 0
+    while heap and measured < limit:
+        r, i = heapq.heappop(heap)
+        r = -r
+        if r != d[i]:  # lowered by a neighbour's bound since: back at its new distance
+            heapq.heappush(heap, (-float(d[i]), i))
+            continue
+        if r <= max(floor, top):
             break
-        r = float(d[i])
-        d[i], done[i] = min(r, closer(i, r)), True
+        d[i], measured = min(r, closer(i, r)), measured + 1
         top = max(top, d[i])
         if V is not None and d[i] < r:  # a closer point than the tessellation said
             tree = tree if tree is not None else cKDTree(V)

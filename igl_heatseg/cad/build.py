@@ -553,25 +553,18 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
                 extra = True
                 skip.update({a: "invalid after sewing (BRepCheck)" for a in bad})
                 continue
-            retry = set(bad or ()) & ctx["between"]
-            if retry and strict < STRICT_REBUILDS:
-                # a sewn face is invalid with edge points between its surfaces and its
-                # neighbours': built again with those points on the mesh before faceting it
-                logger.warning("sewn faces of segments %s are invalid (BRepCheck); building "
-                               "their edges again through the mesh", sorted(retry))
-                ctx["strict"] |= retry
+            # a sewn face invalid next to edge points between its surfaces and its
+            # neighbours': built again with those points on the mesh before faceting it
+            if strict < STRICT_REBUILDS and _through_the_mesh(ctx, bad or (), "sewn faces of "
+                                                              "segments %s are invalid"):
                 strict += 1
                 continue
             if bad == [] and closed and info["free_edges_after_sewing"] and attempt < MAX_REBUILDS:
                 gaps = _open_segments(shape, faces, owner, status, neighbours, ctx["touching"],
                                       ctx["narrowed"])
-                retry = set(gaps) & ctx["between"]
-                if retry and strict < STRICT_REBUILDS:  # the same for free edges
-                    logger.warning("the shell keeps %d free edge(s) along segments %s; building"
-                                   " their edges again through the mesh",
-                                   info["free_edges_after_sewing"], sorted(retry))
+                if strict < STRICT_REBUILDS and _through_the_mesh(  # the same for free edges
+                        ctx, gaps, "the shell keeps free edges along segments %s"):
                     kept = kept or (shape, info, status, dict(skip))
-                    ctx["strict"] |= retry
                     strict += 1
                     continue
                 if gaps:
@@ -622,6 +615,17 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
         sew_tol, faceted_model, message = None, True, f"build failed ({exc}); faceted model"
         solid = False
     return shape, status, sew_tol, faceted_model, message, solid
+
+
+def _through_the_mesh(ctx, segments, what: str) -> bool:
+    """Whether some of ``segments`` (failed faces) have edge points settled between their
+    surfaces (``ctx["between"]``) and may go strict (``ctx["strict"]``: their edges through
+    the mesh in the next build); those are added to ``ctx["strict"]``."""
+    retry = set(segments) & ctx["between"] - ctx["strict"]
+    if retry:
+        logger.warning(what + "; building their edges again through the mesh", sorted(retry))
+    ctx["strict"] |= retry
+    return bool(retry)
 
 
 class _InvalidBRep(RuntimeError):
@@ -731,11 +735,8 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
                            why_bspline=ctx["notes"].get(a) if built_as[a] == "bspline" and
                            face is not None and ctx["fitted"][a].is_analytic else None))
     timings["faces"] = timings.get("faces", 0.0) + time.perf_counter() - t
-    retry = {a for a, st in enumerate(status) if st["status"] == "faceted" and str(
-        st["reason"]).startswith(INVALID_TRIM)} & ctx["between"] - ctx["strict"]
-    if retry:  # their edges through points between surfaces: again through the mesh
-        logger.warning("trimmed faces of segments %s are invalid; building their edges again "
-                       "through the mesh", sorted(retry))
-        ctx["strict"] |= retry
+    if _through_the_mesh(ctx, [a for a, st in enumerate(status) if st["status"] == "faceted"
+                               and str(st["reason"]).startswith(INVALID_TRIM)],
+                         "trimmed faces of segments %s are invalid"):
         return _build_faces(V, F, labels, given, uv, ctx, timings, progress, skip, cache)
     return faces, status, ctx["sew_tol"], owner

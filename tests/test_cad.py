@@ -1417,10 +1417,15 @@ def test_confirmed_distances_bound_their_neighbours():
     def closer(i, r):
         return 0.0 if hole[i] else r
 
-    assert fidelity._farthest_first(d, 3, 0.0, closer).max() == pytest.approx(0.1)
-    bounded = fidelity._farthest_first(d, 3, 0.0, closer, V)
+    status = {}
+    assert fidelity._farthest_first(d, 3, 0.0, closer, status=status).max() == pytest.approx(0.1)
+    assert status == {"exact": False}  # three confirmations, 21 vertices over the hole
+    bounded = fidelity._farthest_first(d, 3, 0.0, closer, V, status)
     assert bounded.max() <= 0.05 + 1e-12 and np.all(bounded >= 0.0)
     assert np.all(bounded[~hole] == d[~hole])
+    assert status == {"exact": False}  # 0.05: a bound, no distance closer() gave
+    fidelity._farthest_first(d, 25, 0.0, closer, V, status)
+    assert status == {"exact": True}  # every vertex over the hole confirmed
 
 
 def _wrong_side_plane():

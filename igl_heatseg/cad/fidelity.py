@@ -483,13 +483,14 @@ def _face_table(shape) -> tuple[dict, list]:
 
 def _distances(shape, V, F, diag, areas=None):
     """(two-sided Hausdorff, RMS and max of mesh vertices -> B-Rep, untessellated faces, the
-    largest deflection used); ``areas``: every face's area, in :func:`faces_of` order."""
+    largest deflection used, whether the Hausdorff distance is confirmed); ``areas``: every
+    face's area, in :func:`faces_of` order."""
     fine = MESH_DEFLECTION_REL * diag
     meshed = _mesh_each(shape, fine)
     deflection = max((d for _, d in meshed), default=fine)
     TV, TF, tri_face, missing = _triangles_and_missing(shape, fine)  # faces as in ``meshed``
     if len(TF) == 0:
-        return math.inf, math.inf, math.inf, len(missing), deflection
+        return math.inf, math.inf, math.inf, len(missing), deflection, False
     d2, nearest, _ = igl.point_mesh_squared_distance(V, TV, TF)  # mesh vertices -> B-Rep
     d_mesh = np.sqrt(d2)
     # on a face meshed coarser than asked (loose edges), the chords are no ruler: the
@@ -502,12 +503,14 @@ def _distances(shape, V, F, diag, areas=None):
                                       short)
     if missing:  # vertices of untessellated faces: exact distances to those faces
         d_mesh = _exact_distances(V, d_mesh, missing, fine)
+    status: dict = {}
     d_mesh = _exact_distances(V, d_mesh, [face for face, _ in meshed], fine,  # confirmed
-                              CONFIRM_DISTANCE_MAX, triangulation=False)
+                              CONFIRM_DISTANCE_MAX, triangulation=False, status=status)
     d_brep = np.sqrt(igl.point_mesh_squared_distance(TV, V, F)[0])  # B-Rep samples -> mesh
     d = np.r_[d_mesh, d_brep]
+    confirmed = status["exact"] or d_brep.max(initial=0.0) >= d_mesh.max(initial=0.0)
     return (float(d.max()), float(np.sqrt(np.mean(d_mesh**2))), float(d_mesh.max()),
-            len(missing), deflection)
+            len(missing), deflection, bool(confirmed))
 
 
 def _short_faces(TV, TF, tri_face, areas) -> np.ndarray:
@@ -550,13 +553,13 @@ def _projected_distances(V, d, face_of, meshed, coarse, floor: float,
 
 
 def _exact_distances(V, d, faces, floor: float, limit: int = EXACT_DISTANCE_MAX,
-                     triangulation: bool = True) -> np.ndarray:
+                     triangulation: bool = True, status=None) -> np.ndarray:
     """Distances ``d`` (n,) of the vertices ``V`` to a tessellation, where the exact distance
     (BRepExtrema) to one of ``faces`` (left untessellated, or all of them) is smaller: the
     vertices farthest by the tessellation first (:func:`_farthest_first`), each against the
     faces whose bounding box (with their triangulation, or of their geometry alone) is within
     its distance (at most ``limit`` vertices: against the whole shape, 2000 queries on a
-    5898-face B-Rep took 150 s)."""
+    5898-face B-Rep took 150 s); ``status`` as for :func:`_farthest_first`."""
     boxes = [_bounds(f, triangulation) for f in faces]
     faces = [f for f, b in zip(faces, boxes, strict=True) if b is not None]
     boxes = np.array([b for b in boxes if b is not None]).reshape(-1, 2, 3)
@@ -572,17 +575,21 @@ def _exact_distances(V, d, faces, floor: float, limit: int = EXACT_DISTANCE_MAX,
                     best = min(best, dist.Value())
         return best
 
-    return _farthest_first(d, limit, floor, closer, V)
+    return _farthest_first(d, limit, floor, closer, V, status)
 
 
-def _farthest_first(d: np.ndarray, limit: int, floor: float, closer, V=None) -> np.ndarray:
+def _farthest_first(d: np.ndarray, limit: int, floor: float, closer, V=None,
+                    status=None) -> np.ndarray:
     """``d`` (n,) with ``d[i]`` lowered to ``closer(i, d[i])`` (a distance, inf for none) for
     the largest distances first, until the next one (or ``floor``) cannot raise the maximum:
     at most ``limit`` of them. With the positions ``V`` (n, 3), each distance found also bounds
     its neighbours' (``d[j] <= d[i] + |V[j] - V[i]|``), so that a hole in a face's
     tessellation under more than ``limit`` vertices of a dense mesh (116 of a true part's
     vertices under a sprocket's face, measured 2.15 % of the diagonal off for 0.01 %) is
-    measured by a few of them: the maximum stays an upper bound of the exact one."""
+    measured by a few of them: the maximum stays an upper bound of the exact one.
+    ``status`` (a dict), when given, gets ``exact``: whether the maximum returned is a
+    distance ``closer`` gave (or at most ``floor``), not an upper bound left when ``limit``
+    ran out."""
     d = d.copy()
     heap = [(-x, i) for i, x in enumerate(d.tolist())]  # farthest first, lowest index on ties
     heapq.heapify(heap)
@@ -603,6 +610,8 @@ def _farthest_first(d: np.ndarray, limit: int, floor: float, closer, V=None) -> 
             near = np.asarray(tree.query_ball_point(V[i], r - d[i]), dtype=np.int64)
             if len(near):
                 d[near] = np.minimum(d[near], d[i] + np.linalg.norm(V[near] - V[i], axis=1))
+    if status is not None:
+        status["exact"] = bool(d.max(initial=0.0) <= max(floor, top))
     return d
 
 
@@ -687,7 +696,10 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         MESH_DEFLECTION_REL of the diagonal and of the faces near them whose triangles fall
         short of their area (projected, inside the face), and by BRepExtrema to faces not
         tessellated; then the farthest, up to CONFIRM_DISTANCE_MAX of them, by BRepExtrema to
-        the faces near them until the largest is exact), ``rms`` (mesh vertices to the B-Rep),
+        the faces near them until the largest is exact), ``hausdorff_confirmed`` (False when
+        CONFIRM_DISTANCE_MAX ran out first: ``hausdorff`` is then an upper bound, the farthest
+        vertices lying over holes the mesher left in a face's tessellation), ``rms`` (mesh
+        vertices to the B-Rep),
         ``hausdorff_rel`` (over
         the bbox diagonal),
         ``vertex_hausdorff_rel`` (the mesh vertices' largest distance to the B-Rep over the
@@ -711,14 +723,16 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
     >>> fid = brep_fidelity(box, V, F)
     >>> fid["valid"], fid["solids"], fid["free_edges"], fid["faces_by_type"]["plane"]["count"]
     (True, 1, 0, 6)
+    >>> fid["hausdorff_confirmed"]
+    True
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     by_type, areas = _face_table(shape)
     valid = shape_valid(shape)  # before meshing (seen to change it)
-    haus, rms, one_sided, missing, deflection = _distances(shape, V, F, diag,
-                                                           [a for _, a in areas])
+    haus, rms, one_sided, missing, deflection, confirmed = _distances(
+        shape, V, F, diag, [a for _, a in areas])
     out = {
         "valid": valid,
         "solids": _count(shape, TopAbs_SOLID),
@@ -727,6 +741,7 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         "free_edges": count_free_edges(shape),
         "faces_by_type": by_type,
         "hausdorff": haus,
+        "hausdorff_confirmed": confirmed,
         "hausdorff_mesh_to_brep": one_sided,
         "rms": rms,
         "bbox_diagonal": diag,

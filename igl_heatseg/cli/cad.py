@@ -48,7 +48,8 @@ def cad_summary(cad: dict) -> str:
         f"B-Rep: {valid} {kind}, {fid.get('faces')} faces from {cad.get('segments')} segments "
         f"({len(cad.get('not_built', []))} faceted, {stand_ins} analytic as B-splines), "
         f"{fid.get('free_edges')} free edges, "
-        f"Hausdorff {100 * haus:.2f} % of the diagonal{chords}{vol_txt}"
+        f"Hausdorff {'' if fid.get('hausdorff_confirmed', True) else 'at most '}"
+        f"{100 * haus:.2f} % of the diagonal{chords}{vol_txt}"
     )
 
 

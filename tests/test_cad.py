@@ -344,6 +344,35 @@ def test_noisy_cube_still_closes():
     assert fid["hausdorff_rel"] < 0.02
 
 
+def _box_faces(x0=0.0, size=1.0):
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+
+    return faces_of(BRepPrimAPI_MakeBox(gp_Pnt(x0, 0, 0), size, size, size).Shape())
+
+
+def test_a_sliver_group_connected_to_nothing_is_left_out_of_the_shell():
+    """Sewing and fixing can split a sliver off a face that then hangs on nothing: BRepCheck
+    calls the shell not connected and blames no face, and the whole model was faceted (a
+    sprocket of 48 faces). A group of faces under SLIVER_GROUP_AREA of the shell's area and
+    connected to nothing else is left out; a second body of real size is kept."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.gp import gp_Dir, gp_Pln, gp_Pnt
+    from OCP.TopAbs import TopAbs_SOLID
+
+    from igl_heatseg.cad import fidelity, sew
+
+    sliver = BRepBuilderAPI_MakeFace(gp_Pln(gp_Pnt(3, 0, 0), gp_Dir(0, 0, 1)),
+                                     0.0, 1e-3, 0.0, 1e-3).Face()
+    shape, info = sew.assemble(_box_faces() + [sliver], 1e-6, closed=True)
+    assert info["slivers_left_out"] == 1 and info["solid"]
+    assert len(faces_of(shape)) == 6 and fidelity.shape_valid(shape)
+    assert [len(g) for g in sew.face_groups(shape)] == [6]
+    shape, info = sew.assemble(_box_faces() + _box_faces(3.0, 0.5), 1e-6, closed=True)
+    assert info["slivers_left_out"] == 0 and info["solid"]
+    assert fidelity._count(shape, TopAbs_SOLID) == 2
+
+
 def test_step_round_trip(tmp_path):
     V, F, labels = box_mesh(3)
     res = build_brep(V, F, labels, box_planes())

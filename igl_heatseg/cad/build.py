@@ -603,6 +603,10 @@ def _sewn_model(V, F, labels, surfaces, uv, ctx, closed, timings, progress):
         if n:
             message = (message + "; " if message else "") + (
                 f"{n} faceted triangle(s) left out: sewing closed them up")
+        if info.get("slivers_left_out"):
+            message = (message + "; " if message else "") + (
+                f"{info['slivers_left_out']} sliver face(s) that sewing split off, connected to "
+                "nothing, left out")
         faceted_model, solid = False, info["solid"]
     except Exception as exc:  # OCC raises Standard_Failure subclasses of Exception
         if isinstance(exc, _InvalidBRep):

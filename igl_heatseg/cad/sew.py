@@ -104,7 +104,7 @@ def _solid(shell):
 
 
 def face_groups(shell) -> list:
-    """Faces of a shell in edge-connected groups, the largest first.
+    """Faces of a shell in edge-connected groups, the group of most faces first.
 
     Parameters
     ----------

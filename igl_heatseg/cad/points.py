@@ -51,10 +51,10 @@ def place_vertices(V, graph, projs, ctx) -> dict:
     """
     pos = {}
     for v in graph.corners.tolist():
-        ps = [projs[s] for s in graph.vertex_sides[v] if s >= 0 and projs[s] is not None]
+        sides = graph.vertex_sides[v]
+        ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
         X = V[v]
         if ps:
-            sides = graph.vertex_sides[v]
             Y, moved, between = geometry.settle_on_surfaces(
                 V[v][None], ps, ctx["curve_tol"], _move_limit(ctx, sides), _between(ctx, sides))
             X = Y[0]

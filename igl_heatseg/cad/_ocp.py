@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import itertools
 
-__all__ = ["require_ocp", "quiet_occ"]
+__all__ = ["require_ocp", "quiet_occ", "shapes_in"]
 
 INSTALL_HINT = (
     "igl_heatseg.cad needs OpenCASCADE through OCP (cadquery-ocp-novtk 8.0): "
@@ -37,3 +38,35 @@ def quiet_occ():
     finally:
         for p, level in saved:
             p.SetTraceLevel(level)
+
+
+def shapes_in(shapes) -> list:
+    """The shapes of an OCC list (``TopTools_ListOfShape``, e.g. an ancestor map's entry) as a
+    Python list.
+
+    Reads exactly ``Extent()`` items: letting OCP's iterator run out costs about 30 us per list
+    (its StopIteration), which made ``list(lst)`` over the 1,284 edges of an 809-face sewn
+    shell take 0.2 s, 6 of a coarse part's 85 s over its rebuilds.
+
+    Parameters
+    ----------
+    shapes : OCP.collections.List_TopoDS_Shape
+
+    Returns
+    -------
+    list of TopoDS_Shape
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    >>> from OCP.TopExp import TopExp
+    >>> from OCP.collections import (
+    ...     IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as Map)
+    >>> m = Map()
+    >>> TopExp.MapShapesAndAncestors_s(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape(),
+    ...                                TopAbs_EDGE, TopAbs_FACE, m)
+    >>> len(shapes_in(m.FindFromIndex(1)))     # a box's edge is on two faces
+    2
+    """
+    return list(itertools.islice(shapes, shapes.Extent()))

@@ -6,7 +6,7 @@ not blamed on anyone: it is left out of the next build."""
 
 from __future__ import annotations
 
-from ._ocp import require_ocp
+from ._ocp import require_ocp, shapes_in
 
 require_ocp()
 
@@ -88,7 +88,7 @@ def touching_segments(shape, owners):
         while ex.More():
             v = ex.Current()
             if vmap.Contains(v):
-                for g in vmap.FindFromKey(v):
+                for g in shapes_in(vmap.FindFromKey(v)):
                     if not g.IsSame(f):
                         a = owners.get(BRep_Tool.Surface_s(TopoDS.Face(g)))
                         if a is not None:

@@ -7,7 +7,7 @@ import logging
 
 import numpy as np
 
-from ._ocp import require_ocp
+from ._ocp import require_ocp, shapes_in
 
 require_ocp()
 
@@ -134,7 +134,7 @@ def face_groups(shell) -> list:
     amap = _AncestorMap()
     TopExp.MapShapesAndAncestors_s(shell, TopAbs_EDGE, TopAbs_FACE, amap)
     for k in range(1, amap.Extent() + 1):
-        ids = [fmap.FindIndex(f) for f in amap.FindFromIndex(k)]
+        ids = [fmap.FindIndex(f) for f in shapes_in(amap.FindFromIndex(k))]
         for j in ids[1:]:
             parent[root(j)] = root(ids[0])
     groups: dict = {}

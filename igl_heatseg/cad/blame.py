@@ -14,21 +14,14 @@ from OCP.BRep import BRep_Tool  # noqa: E402
 from OCP.collections import (  # noqa: E402
     IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as _AncestorMap,
 )
-from OCP.TopAbs import (  # noqa: E402
-    TopAbs_EDGE,
-    TopAbs_FACE,
-    TopAbs_FORWARD,
-    TopAbs_REVERSED,
-    TopAbs_VERTEX,
-    TopAbs_WIRE,
-)
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX, TopAbs_WIRE  # noqa: E402
 from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS  # noqa: E402
 
 from .roundtrip import invalid_faces  # noqa: E402
 
 __all__ = ["surface_owners", "blame", "open_segments", "touching_segments", "collapsed",
-           "orientation_conflicts", "invalid_segments"]
+           "invalid_segments"]
 
 
 def surface_owners(faces, owner) -> dict:
@@ -247,88 +240,6 @@ def open_segments(shape, faces, owner, status, neighbours, narrow=False, narrowe
     return out
 
 
-def orientation_conflicts(shape) -> list:
-    """Faces of a sewn shape that no choice of face orientations makes consistent with their
-    neighbours.
-
-    Two faces sharing a manifold edge are oriented alike when they use the edge in opposite
-    directions. Two faces that share several edges, used alike along some and oppositely along
-    others, cannot be: when there are such pairs, their faces are the result. Otherwise the
-    faces are coloured "kept" or "flipped" by a search from each component's first face, and
-    an edge whose two faces the colouring cannot make alike (closing an odd cycle, at an edge
-    the search order picks) puts both faces in the result. BRepCheck finds such a shell badly
-    oriented but names no face (tuning bolt_s1007_irregular_n0.2: a torus fillet and its
-    plane, 5 shared edges used alike, the whole model faceted after 400 s of rebuilds). Seam
-    edges (twice in one face) and edges of more than two faces are left out.
-
-    Parameters
-    ----------
-    shape : TopoDS_Shape
-        A shell, solid or compound of faces.
-
-    Returns
-    -------
-    list of TopoDS_Face
-        Each face once, in the shape's face order; empty when the faces can be oriented alike.
-
-    Examples
-    --------
-    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
-    >>> from igl_heatseg.cad.fidelity import faces_of, shell_of
-    >>> faces = faces_of(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())
-    >>> orientation_conflicts(shell_of(faces))
-    []
-    >>> len(orientation_conflicts(shell_of(faces[:5] + [faces[5].Reversed()])))  # one flip
-    0
-    """
-    fmap = _AncestorMap()  # faces, indexed 1..n
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_FACE, TopAbs_WIRE, fmap)
-    emap = _AncestorMap()
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
-    n = fmap.Extent()
-    uses: dict = {}  # edge index -> [(face index, +1 forward / -1 reversed)]
-    for i in range(1, n + 1):
-        face = fmap.FindKey(i)
-        seen: dict = {}
-        ex = TopExp_Explorer(face, TopAbs_EDGE)
-        while ex.More():
-            e = ex.Current()
-            if e.Orientation() in (TopAbs_FORWARD, TopAbs_REVERSED):
-                seen.setdefault(emap.FindIndex(e), []).append(
-                    1 if e.Orientation() == TopAbs_FORWARD else -1)
-            ex.Next()
-        for k, signs in seen.items():
-            if len(signs) == 1:  # (a seam is used twice by its face)
-                uses.setdefault(k, []).append((i, signs[0]))
-    pairs: dict = {}  # (face, face) -> {True: used alike along some edge, False: oppositely}
-    for use in uses.values():
-        if len(use) == 2:
-            (a, sa), (b, sb) = sorted(use)
-            pairs.setdefault((a, b), set()).add(sa == sb)  # alike: one of the two must flip
-    bad = {f for pair, kinds in pairs.items() if len(kinds) == 2 for f in pair}
-    if bad:  # two faces at odds along their own edges: no colouring is needed to blame them
-        return [TopoDS.Face(fmap.FindKey(i)) for i in sorted(bad)]
-    adj: list = [[] for _ in range(n + 1)]
-    for (a, b), kinds in pairs.items():
-        adj[a].append((b, True in kinds))
-        adj[b].append((a, True in kinds))
-    flip = [-1] * (n + 1)
-    for start in range(1, n + 1):
-        if flip[start] >= 0:
-            continue
-        flip[start], queue = 0, [start]
-        while queue:
-            a = queue.pop()
-            for b, differ in adj[a]:
-                want = flip[a] ^ int(differ)
-                if flip[b] < 0:
-                    flip[b] = want
-                    queue.append(b)
-                elif flip[b] != want:
-                    bad |= {a, b}
-    return [TopoDS.Face(fmap.FindKey(i)) for i in sorted(bad)]
-
-
 def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, narrow=True,
                      narrowed=None, exempt=None, droppable=None, closed_up=None):
     """Segments to facet for the faces of a sewn shape that fail BRepCheck.
@@ -374,8 +285,6 @@ def invalid_segments(shape, faces, owner, status, neighbours=None, valid=None, n
     []
     """
     bad_faces = invalid_faces(shape, valid, exempt)
-    if bad_faces is None:  # the shell is to blame: its faces that cannot be oriented alike
-        bad_faces = orientation_conflicts(shape) or None
     if not bad_faces:
         return bad_faces
     owners = surface_owners(faces, owner)

@@ -25,6 +25,7 @@ from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
 from .fidelity import face_area, faces_of, shape_analysis, shell_of, shells_of  # noqa: E402
+from .sew import orientation_conflicts  # noqa: E402
 from .step import read_step, step_uncertainty, write_step  # noqa: E402
 
 __all__ = ["invalid_faces"]
@@ -72,6 +73,8 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
         Faces of ``shape``: those invalid in memory; else those whose read-back (matched by
         shared vertices) is invalid, or valid but out of place (:func:`_stray_faces`), or
         that came back with slivers split off as shells of their own (:func:`_split_off`).
+        A shape (or its read-back) invalid with every face valid names the faces that
+        cannot be oriented alike (:func:`~igl_heatseg.cad.sew.orientation_conflicts`).
         ``[]`` when every face is valid and in place both ways, None when the shape is
         invalid with no face to blame.
 
@@ -83,8 +86,9 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     """
     if valid is not True:  # one analysis answers for the shape and names its faces
         checked = shape_analysis(shape)
-        if not checked.IsValid():
-            return [f for f in faces_of(shape) if not checked.IsValid(f)] or None
+        if not checked.IsValid():  # (a shell can be invalid for its orientation alone)
+            return [f for f in faces_of(shape) if not checked.IsValid(f)] or \
+                orientation_conflicts(shape) or None
     box = _box(shape)
     mine = faces_of(shape)
     if exempt:
@@ -103,6 +107,9 @@ def invalid_faces(shape, valid: bool | None = None, exempt=None) -> list | None:
     # by its place when it shares none and no face was split (a face without vertices)
     theirs = faces_of(back)
     bad = [j for j, g in enumerate(theirs) if not checked.IsValid(g)]
+    if not bad:  # (held-out plate_s13006: a valid solid came back badly oriented)
+        odd = orientation_conflicts(back)
+        bad = [j for j, g in enumerate(theirs) if any(g.IsSame(f) for f in odd)]
     origin = _origins(mine, [theirs[j] for j in bad], _diagonal(box))
     same = len(mine) == len(theirs)
     named = [i if i is not None else (j if same else None) for i, j in zip(origin, bad,

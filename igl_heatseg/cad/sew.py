@@ -27,7 +27,6 @@ from OCP.TopAbs import (  # noqa: E402
     TopAbs_FORWARD,
     TopAbs_REVERSED,
     TopAbs_SHELL,
-    TopAbs_WIRE,
 )
 from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Compound  # noqa: E402
@@ -184,8 +183,8 @@ def orientation_conflicts(shape) -> list:
     >>> len(orientation_conflicts(shell_of(faces[:5] + [faces[5].Reversed()])))  # one flip
     0
     """
-    fmap = _AncestorMap()  # faces, indexed 1..n
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_FACE, TopAbs_WIRE, fmap)
+    fmap = _AncestorMap()  # faces, indexed 1..n (as they are oriented in ``shape``)
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_FACE, TopAbs_SHELL, fmap)
     emap = _AncestorMap()
     TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
     n = fmap.Extent()

@@ -878,16 +878,17 @@ def test_faces_that_cannot_be_oriented_alike_are_blamed(monkeypatch):
     faces, shape = _pillow(twist=False)
     assert roundtrip_mod.invalid_faces(shape) is None
     assert blame_mod.invalid_segments(shape, faces, [3, 7], built) is None
-    # valid in memory, and the same once written to STEP and read back (held-out
-    # plate_s13006_irregular_n0.1: the solid came back badly oriented, faceted whole)
-    # (the reader is given the twisted shell, which it mends when it reads a real file)
+    # valid in memory, badly oriented once written to STEP and read back (f13
+    # plate_s13006_irregular_n0.1, faceted whole); the reader is handed the twisted shell
+    # (it mends this small one when it reads a real file)
     faces, shape = _pillow(twist=False)
     twisted = _pillow(twist=True)[1]
     verdicts = iter([_Verdict(valid=True), _Verdict()])
     monkeypatch.setattr(roundtrip_mod, "shape_analysis", lambda shape: next(verdicts))
     monkeypatch.setattr(roundtrip_mod, "read_step", lambda path: twisted)
-    bad = roundtrip_mod.invalid_faces(shape)  # (matched by their vertices, which the two
-    assert len(bad) == 1 and any(bad[0].IsSame(g) for g in faces)  # squares share: one)
+    # (named by their vertices, which the two squares share: one of them)
+    bad = roundtrip_mod.invalid_faces(shape)
+    assert len(bad) == 1 and any(bad[0].IsSame(g) for g in faces)
 
 
 class _Verdict:

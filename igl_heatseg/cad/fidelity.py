@@ -280,8 +280,9 @@ def _mesh_again_finer(face, d: float) -> float:
             if tri.Deflection() <= LOOSE_MESH_FACTOR * factor * d:
                 return factor * d
             best = min(best, (tri.Deflection() / (factor * d), factor * d))
-    BRepTools.Clean_s(face)
-    BRepMesh_IncrementalMesh(face, best[1], False, MESH_ANGLE, False)
+    if best[1] != factor * d:  # (the face is meshed with the last retry already)
+        BRepTools.Clean_s(face)
+        BRepMesh_IncrementalMesh(face, best[1], False, MESH_ANGLE, False)
     return best[1]
 
 

@@ -110,6 +110,15 @@ def _solid(shell):
     return solid, valid
 
 
+def _face_edge_maps(shape):
+    """``(faces, edges)``: the shape's faces indexed 1..n (as they are oriented in it, each
+    with its shells), and its edges indexed 1..m, each with the faces using it."""
+    fmap, emap = _AncestorMap(), _AncestorMap()
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_FACE, TopAbs_SHELL, fmap)
+    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    return fmap, emap
+
+
 def face_groups(shell) -> list:
     """Faces of a shell in edge-connected groups, the group of most faces first.
 
@@ -128,8 +137,7 @@ def face_groups(shell) -> list:
     >>> [len(g) for g in face_groups(BRepPrimAPI_MakeBox(1.0, 1.0, 1.0).Shape())]
     [6]
     """
-    fmap = _AncestorMap()  # faces, indexed 1..n
-    TopExp.MapShapesAndAncestors_s(shell, TopAbs_FACE, TopAbs_SHELL, fmap)
+    fmap, amap = _face_edge_maps(shell)
     parent = list(range(fmap.Extent() + 1))
 
     def root(i):
@@ -138,8 +146,6 @@ def face_groups(shell) -> list:
             i = parent[i]
         return i
 
-    amap = _AncestorMap()
-    TopExp.MapShapesAndAncestors_s(shell, TopAbs_EDGE, TopAbs_FACE, amap)
     for k in range(1, amap.Extent() + 1):
         ids = [fmap.FindIndex(f) for f in shapes_in(amap.FindFromIndex(k))]
         for j in ids[1:]:
@@ -183,10 +189,7 @@ def orientation_conflicts(shape) -> list:
     >>> len(orientation_conflicts(shell_of(faces[:5] + [faces[5].Reversed()])))  # one flip
     0
     """
-    fmap = _AncestorMap()  # faces, indexed 1..n (as they are oriented in ``shape``)
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_FACE, TopAbs_SHELL, fmap)
-    emap = _AncestorMap()
-    TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, emap)
+    fmap, emap = _face_edge_maps(shape)
     n = fmap.Extent()
     uses: dict = {}  # edge index -> [(face index, +1 forward / -1 reversed)]
     for i in range(1, n + 1):

@@ -135,3 +135,39 @@ def test_split_at_creases_keeps_large_pieces_and_smooth_turns():
         out, moved = split_at_creases(F, labels, TT, FN, area)
         # 30 degrees is no crease; at 60 each facet is half the segment: both stay
         assert moved == 0 and out.tolist() == labels.tolist()
+
+
+def _tube(facets: int, radius: float = 1.0, height: float = 2.0):
+    """An open tube of ``facets`` flat facets whose vertices lie on a cylinder (a CAD export of
+    a small hole): two triangles per facet, facet ``i`` = faces ``2i, 2i + 1``."""
+    t = np.arange(facets) * 2 * np.pi / facets
+    ring = np.c_[radius * np.cos(t), radius * np.sin(t)]
+    V = np.r_[np.c_[ring, np.zeros(facets)], np.c_[ring, np.full(facets, height)]]
+    F = []
+    for i in range(facets):
+        j = (i + 1) % facets
+        F += [[i, j, facets + j], [i, facets + j, facets + i]]
+    return V, np.array(F, dtype=np.int64)
+
+
+def test_split_at_creases_keeps_the_facets_of_a_coarse_cylinder_together():
+    from igl_heatseg.surfaces.strays import split_at_creases
+
+    V, F = _tube(8)  # 45 degrees between facets: every facet is a crease-free piece
+    # a cap triangle across the rim, its corners on the cylinder too, square to it
+    F = np.r_[F, [[1, 0, 4]]]
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    area = 0.5 * igl.doublearea(V, F)
+    labels = np.zeros(len(F), dtype=np.int64)
+    # without the positions every facet but the first leaves (each 1/8 of the segment)
+    out, moved = split_at_creases(F, labels, TT, FN, area)
+    assert moved == 15 and len(np.unique(out[:16])) == 8
+    # with them the facets lie on the segment's cylinder and stay; the cap triangle leaves
+    out, moved = split_at_creases(F, labels, TT, FN, area, V, 1e-6)
+    assert moved == 1 and out[:16].tolist() == [0] * 16 and out[16] == 1
+    # a segment whose faces no surface explains keeps the old rule
+    bent = V.copy()
+    bent[8:, 0] += 0.3 * bent[8:, 1]  # the top ring sheared: no cylinder through both rings
+    out, moved = split_at_creases(F, labels, TT, FN, area, bent, 1e-6)
+    assert moved == 15

@@ -24,7 +24,8 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
    neighbours that fit them, so a freeform neighbour's triangle stayed). On an exact
-   tessellation, small pieces a segment holds only across creases leave it
+   tessellation, small pieces a segment holds only across creases leave it, unless they lie
+   on its surface (a coarse small hole's facets)
    (:func:`~igl_heatseg.surfaces.strays.split_at_creases`).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
@@ -693,7 +694,7 @@ def refine_segmentation(
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN, W, exact)
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if exact:  # no segment of a CAD tessellation runs across a crease
-        labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F))
+        labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F), V, tol, W)
         if crease_moved:  # a piece sent to a neighbour's piece that left too is cut off
             labels = label_pieces(F, labels, TT)
         moved += crease_moved

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..mesh.topology import label_pieces
-from .segment_fit import corner_rms, normal_angle
+from .segment_fit import corner_rms, explains, fit_faces, normal_angle
 from .tolerance import CREASE_ANGLE
 
 __all__ = ["shed_strays", "split_at_creases"]
@@ -34,7 +34,8 @@ CREASE_PIECE_SHARE = 0.15
 
 
 def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.ndarray,
-                     area: np.ndarray) -> tuple[np.ndarray, int]:
+                     area: np.ndarray, V: np.ndarray | None = None, tol: float | None = None,
+                     W: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Segments of an exact tessellation cut at their inner creases; small pieces leave.
 
     On a CAD tessellation a crease (faces turning by more than
@@ -46,6 +47,13 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
     segment's area goes to the neighbouring segment it joins across the most smooth edges, or
     becomes a segment of its own when it joins none smoothly.
 
+    A crease can also be the tessellation's: the facets of a hole of radius 0.5 exported with
+    edges of about 1 turn by 60-90 degrees. So, given ``V`` and ``tol``, a piece stays when its
+    segment is one analytic surface within ``tol`` (fitted to all its faces) and every face of
+    the piece has its corners on it (RMS within ``tol``) and its normal within
+    :data:`STRAY_ANGLE` of it (a cap's triangle with its three corners on the rim of a hole
+    lies on the hole's cylinder too, square to it).
+
     Parameters
     ----------
     F : (m, 3) int64
@@ -56,6 +64,12 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
         Unit face normals.
     area : (m,) float64
         Face areas.
+    V : (n, 3) float64, optional
+        Vertex positions; with ``tol``, the pieces on their segment's surface stay.
+    tol : float, optional
+        Fit tolerance (model units).
+    W : (n, 3) float64, optional
+        Positions the fits take normals from (:func:`~.segment_fit.fit_faces`).
 
     Returns
     -------
@@ -88,9 +102,16 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
         if len(ps) < 2:
             continue
         keep = ps[np.argmax(piece_area[ps])]
-        for p in ps:
-            if p == keep or piece_area[p] > CREASE_PIECE_SHARE * seg_area[lab]:
-                continue
+        small = [p for p in ps if p != keep and piece_area[p] <= CREASE_PIECE_SHARE * seg_area[lab]]
+        if small and V is not None and tol is not None:
+            faces = np.flatnonzero(labels == lab)
+            s = fit_faces(V, F, faces, tol, W=W, FN=FN)
+            on = np.zeros(len(F), dtype=bool)
+            if explains(s, tol):
+                on[faces] = (corner_rms(V, F, faces, s) <= tol) & (
+                    normal_angle(V, F, FN, faces, s) <= STRAY_ANGLE)
+            small = [p for p in small if not on[pieces == p].all()]
+        for p in small:
             fp = np.flatnonzero(pieces == p)
             nb = TT[fp]
             others = labels[nb[(nb >= 0) & ~crease[fp]]]

@@ -553,6 +553,29 @@ def test_long_chart_of_any_size_is_cut_for_packing_into_pieces_no_longer_than_th
         assert len(out) == 4 and all(piece.bijective for _, _, piece in out)
 
 
+def test_no_piece_is_cut_for_packing_more_stretched_than_the_bound_and_its_chart():
+    """A strip 40 long whose map is stretched 2.5 times along its last 4 units: the chart as
+    a whole meets the per-chart bound (5), the end piece alone does not; the strip stays
+    whole, unless the bound is raised (as :func:`peel_for_packing` does for spikes)."""
+    from igl_heatseg.parameterization.cut import cut_to_disk
+    from igl_heatseg.parameterization.distortion import distortion
+    from igl_heatseg.parameterization.split import cut_for_packing
+
+    V, F = _strip(40, 2)
+    res = cut_to_disk(V, F)
+    param = parameterize_chart(res.V, res.F)
+    UV = res.V[:, :2].copy()  # the flat strip's isometric map, its end stretched
+    end = UV[:, 0] > 36
+    UV[end, 0] = 36 + 2.5 * (UV[end, 0] - 36)
+    stretched = dataclasses.replace(param, UV=UV, distortion=distortion(res.V, res.F, UV))
+    assert stretched.distortion["sym_dirichlet"] < 5
+    out = cut_for_packing(res, stretched, max_length=12.0, big=False, sd_max=np.inf)
+    assert len(out) == 4
+    assert max(q.distortion["sym_dirichlet"] for *_, q in out) > 5
+    assert len(cut_for_packing(res, stretched, max_length=12.0, big=False)) == 1
+    assert len(cut_for_packing(res, param, max_length=12.0, big=False)) == 4
+
+
 def test_cad_gets_the_map_of_a_chart_cut_for_packing_put_together_again():
     """Pieces cut for packing keep their chart's map: CAD's freeform fit gets that map whole;
     pieces mapped separately (cut for distortion) give no chart."""

@@ -579,6 +579,7 @@ def cut_for_packing(
     *,
     max_length: float = np.inf,
     big: bool = True,
+    sd_max: float = SPLIT_SD_MAX,
 ) -> list:
     """Cut a long chart for packing, keeping its map (restricted to every piece).
 
@@ -593,6 +594,10 @@ def cut_for_packing(
     max_length, big
         As for :func:`split_for_packing`, ``max_length`` in the units of ``res.V`` (the map is
         measured at its true scale: UV area = 3D area).
+    sd_max : float
+        As for :func:`peel_for_packing`: the chart is left whole when a piece is more
+        stretched than this and than the chart (a two-triangle piece of a coarse plate with
+        three holes cut across reached 6.8 where its chart had 4.3).
 
     Returns
     -------
@@ -616,7 +621,7 @@ def cut_for_packing(
     """
     out = _split_keeping_map(res, param, name, PACKING_METHODS[0], lambda scale: (
         split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)))
-    return out or [(np.arange(len(res.F)), res, param)]
+    return _within_bound(out, res, param, sd_max)
 
 
 def peel_for_packing(
@@ -658,12 +663,18 @@ def peel_for_packing(
     >>> [len(faces) for faces, _, _ in out], all(q.bijective for _, _, q in out)
     ([3, 1], True)
     """
-    whole = [(np.arange(len(res.F)), res, param)]
     out = _split_keeping_map(res, param, name, PACKING_METHODS[1],
                              lambda scale: split_spikes(param.UV, res.F, gap / scale))
+    return _within_bound(out, res, param, sd_max)
+
+
+def _within_bound(out: list | None, res: CutResult, param, sd_max: float) -> list:
+    """The pieces ``out`` of a chart cut for packing, or the chart whole when there are none or
+    one is more stretched than ``sd_max`` and than the chart (a sliver alone can be more
+    stretched than its chart on average)."""
     bound = max(sd_max, param.distortion.get("sym_dirichlet", np.inf))
     if out is None or any(q.distortion.get("sym_dirichlet", np.inf) > bound for *_, q in out):
-        return whole  # a sliver alone can be more stretched than its chart on average
+        return [(np.arange(len(res.F)), res, param)]
     return out
 
 

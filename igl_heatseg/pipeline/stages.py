@@ -335,8 +335,9 @@ def map_chart(
     of highest stretch while the best bijective map's mean symmetric Dirichlet energy is above
     ``split_sd_max``); a piece of at least ``PACK_MIN_AREA_FRACTION`` of the mesh's area is cut
     for packing when it is long or C-shaped
-    (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping its map.  A failure
-    is recorded in ``ch.error``, not raised.
+    (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping its map, unless a
+    piece is then more stretched than ``split_sd_max`` and the chart.  A failure is recorded
+    in ``ch.error``, not raised.
 
     Parameters
     ----------
@@ -396,7 +397,7 @@ def map_chart(
         (rows[sub_rows], sub, q)
         for rows, r, p in pieces
         for sub_rows, sub, q in (
-            cut_for_packing(r, p, name)
+            cut_for_packing(r, p, name, sd_max=split_sd_max)
             if areas[ch.faces[rows]].sum() >= PACK_MIN_AREA_FRACTION * areas.sum()
             else [(np.arange(len(r.F)), r, p)]
         )
@@ -534,13 +535,14 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float
        across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`);
     2. then the spikes peeled off every chart whose pieces cost less room than it
        (:func:`~igl_heatseg.parameterization.split.peel_for_packing`; the gutter is
-       estimated for a square filled to :data:`PEEL_FILL_GUESS`), unless a piece's energy
-       is above ``sd_max`` and its chart's.
+       estimated for a square filled to :data:`PEEL_FILL_GUESS`);
+
+    neither when a piece's energy is above ``sd_max`` and its chart's.
 
     The maps are kept (restricted to the pieces)."""
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
     fill = _trial_cut(done, areas, gutter, "long charts cut", lambda c, name: cut_for_packing(
-        c.cut, c.param, name, max_length=bound, big=False))
+        c.cut, c.param, name, max_length=bound, big=False, sd_max=sd_max))
     total = sum(c.area for d in done for c in d[1] if c.param is not None)
     gap = gutter * float(np.sqrt(total / PEEL_FILL_GUESS))
     _trial_cut(done, areas, gutter, "spikes peeled", lambda c, name: peel_for_packing(

@@ -555,9 +555,9 @@ def test_long_chart_of_any_size_is_cut_for_packing_into_pieces_no_longer_than_th
 
 def test_no_piece_is_cut_for_packing_more_stretched_than_the_bound_and_its_chart():
     """A strip 40 long whose map is stretched 2.5 times along its last 4 units: the chart as
-    a whole meets the per-chart bound (5), the end piece alone does not; the strip stays
-    whole, unless the bound is raised (as :func:`peel_for_packing` does for spikes)."""
-    from igl_heatseg.parameterization.cut import cut_to_disk
+    a whole meets the per-chart bound (5), the end piece alone does not; it joins the piece
+    next to it (unless the bound is raised), as for spikes peeled (:func:`peel_for_packing`)."""
+    from igl_heatseg.parameterization.cut import chart_topology, cut_to_disk
     from igl_heatseg.parameterization.distortion import distortion
     from igl_heatseg.parameterization.split import cut_for_packing
 
@@ -572,7 +572,12 @@ def test_no_piece_is_cut_for_packing_more_stretched_than_the_bound_and_its_chart
     out = cut_for_packing(res, stretched, max_length=12.0, big=False, sd_max=np.inf)
     assert len(out) == 4
     assert max(q.distortion["sym_dirichlet"] for *_, q in out) > 5
-    assert len(cut_for_packing(res, stretched, max_length=12.0, big=False)) == 1
+    out = cut_for_packing(res, stretched, max_length=12.0, big=False)
+    assert len(out) == 3 and max(q.distortion["sym_dirichlet"] for *_, q in out) < 5
+    assert np.array_equal(np.sort(np.concatenate([f for f, _, _ in out])), np.arange(len(F)))
+    far = out[-1][0]  # the end piece and its neighbour: one disk
+    assert chart_topology(F[far]).is_disk and all(q.bijective for *_, q in out)
+    assert np.isin(np.flatnonzero(V[F].mean(axis=1)[:, 0] > 36), far).all()
     assert len(cut_for_packing(res, param, max_length=12.0, big=False)) == 4
 
 
@@ -633,3 +638,4 @@ def test_split_for_distortion_finds_an_uneven_halving_when_no_even_one_is_a_disk
     assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
     assert all(chart_topology(F[p]).is_disk for p in pieces)
     assert min(map(len, pieces)) >= 0.3 * len(F)
+

@@ -595,9 +595,8 @@ def cut_for_packing(
         As for :func:`split_for_packing`, ``max_length`` in the units of ``res.V`` (the map is
         measured at its true scale: UV area = 3D area).
     sd_max : float
-        As for :func:`peel_for_packing`: the chart is left whole when a piece is more
-        stretched than this and than the chart (a two-triangle piece of a coarse plate with
-        three holes cut across reached 6.8 where its chart had 4.3).
+        As for :func:`peel_for_packing` (a two-triangle piece of a coarse plate with three
+        holes cut across reached 6.8 where its chart had 4.3).
 
     Returns
     -------
@@ -621,7 +620,7 @@ def cut_for_packing(
     """
     out = _split_keeping_map(res, param, name, PACKING_METHODS[0], lambda scale: (
         split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)))
-    return _within_bound(out, res, param, sd_max)
+    return _within_bound(out, res, param, sd_max, name, PACKING_METHODS[0])
 
 
 def peel_for_packing(
@@ -641,8 +640,10 @@ def peel_for_packing(
     name : str
         Chart name for messages.
     sd_max : float
-        The chart is left whole when a piece's symmetric Dirichlet energy is above this and
-        above the chart's own (a sliver alone can be more stretched than its chart).
+        A piece whose symmetric Dirichlet energy is above this and above the chart's own (a
+        sliver alone can be more stretched than its chart) joins the adjacent piece it shares
+        most edges with; the chart is left whole when that does not bring every piece within
+        (or a union is not a disk).
 
     Returns
     -------
@@ -665,17 +666,42 @@ def peel_for_packing(
     """
     out = _split_keeping_map(res, param, name, PACKING_METHODS[1],
                              lambda scale: split_spikes(param.UV, res.F, gap / scale))
-    return _within_bound(out, res, param, sd_max)
+    return _within_bound(out, res, param, sd_max, name, PACKING_METHODS[1])
 
 
-def _within_bound(out: list | None, res: CutResult, param, sd_max: float) -> list:
-    """The pieces ``out`` of a chart cut for packing, or the chart whole when there are none or
-    one is more stretched than ``sd_max`` and than the chart (a sliver alone can be more
-    stretched than its chart on average)."""
+def _within_bound(out: list | None, res: CutResult, param, sd_max: float, name: str,
+                  method: str) -> list:
+    """The pieces ``out`` of a chart cut for packing, none more stretched than ``sd_max`` and
+    than the chart (a sliver alone can be more stretched than its chart on average): the most
+    stretched piece over that joins the adjacent piece it shares most edges with, while their
+    union is a disk; else the chart stays whole (also when there are no pieces)."""
+    whole = [(np.arange(len(res.F)), res, param)]
     bound = max(sd_max, param.distortion.get("sym_dirichlet", np.inf))
-    if out is None or any(q.distortion.get("sym_dirichlet", np.inf) > bound for *_, q in out):
-        return [(np.arange(len(res.F)), res, param)]
-    return out
+    if out is None:
+        return whole
+    A = face_adjacency(res.F).tocoo()
+    while True:
+        sds = np.array([q.distortion.get("sym_dirichlet", np.inf) for *_, q in out])
+        if sds.max() <= bound:
+            return out
+        if len(out) <= 2:
+            return whole
+        piece = np.empty(len(res.F), dtype=np.int64)
+        for k, (faces, _, _) in enumerate(out):
+            piece[faces] = k
+        i = int(np.argmax(sds))
+        across = piece[A.col[piece[A.row] == i]]
+        across = across[across != i]
+        if len(across) == 0:
+            return whole
+        j = int(np.bincount(across).argmax())
+        merged = np.sort(np.concatenate([out[i][0], out[j][0]]))
+        if not chart_topology(res.F[merged]).is_disk:
+            return whole
+        pieces = [faces for k, (faces, _, _) in enumerate(out) if k not in (i, j)] + [merged]
+        out = _restricted(res, param, pieces, name, method)
+        if out is None:
+            return whole
 
 
 def _split_keeping_map(res: CutResult, param, name: str, method: str, choose) -> list | None:

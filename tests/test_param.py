@@ -639,3 +639,17 @@ def test_split_for_distortion_finds_an_uneven_halving_when_no_even_one_is_a_disk
     assert all(chart_topology(F[p]).is_disk for p in pieces)
     assert min(map(len, pieces)) >= 0.3 * len(F)
 
+
+def test_a_tutte_map_that_flips_with_mean_value_weights_is_made_with_uniform_ones(data_dir):
+    """Both are bijective in exact arithmetic; on this noisy chart (data/CREDITS.md) the mean
+    value map flips 4 triangles, and the chart was left without a bijective map."""
+    from igl_heatseg.parameterization.bijectivity import certify_map
+    from igl_heatseg.parameterization.fallback import tutte_map
+
+    d = np.load(data_dir / "chart_mean_value_tutte_flips.npz")
+    V, F = d["V"], d["F"]
+    assert not certify_map(tutte_map(V, F), F).bijective
+    assert certify_map(tutte_map(V, F, weights="uniform"), F).bijective
+    p = parameterize_chart(V, F)
+    assert p.bijective and certify_map(p.UV, F).bijective
+    assert any(a["method"] == "tutte" and a["bijective"] for a in p.attempts)

@@ -686,12 +686,12 @@ def _within_bound(out: list | None, res: CutResult, param, sd_max: float, name: 
             return out
         if len(out) <= 2:
             return whole
-        piece = np.empty(len(res.F), dtype=np.int64)
+        piece = np.full(len(res.F), -1, dtype=np.int64)
         for k, (faces, _, _) in enumerate(out):
             piece[faces] = k
         i = int(np.argmax(sds))
         across = piece[A.col[piece[A.row] == i]]
-        across = across[across != i]
+        across = across[(across != i) & (across >= 0)]
         if len(across) == 0:
             return whole
         j = int(np.bincount(across).argmax())

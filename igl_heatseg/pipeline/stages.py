@@ -335,9 +335,9 @@ def map_chart(
     of highest stretch while the best bijective map's mean symmetric Dirichlet energy is above
     ``split_sd_max``); a piece of at least ``PACK_MIN_AREA_FRACTION`` of the mesh's area is cut
     for packing when it is long or C-shaped
-    (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping its map, unless a
-    piece is then more stretched than ``split_sd_max`` and the chart.  A failure is recorded
-    in ``ch.error``, not raised.
+    (:func:`igl_heatseg.parameterization.split.cut_for_packing`), keeping its map (a piece
+    more stretched than ``split_sd_max`` and the chart joins its neighbour).  A failure is
+    recorded in ``ch.error``, not raised.
 
     Parameters
     ----------
@@ -537,7 +537,8 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float
        (:func:`~igl_heatseg.parameterization.split.peel_for_packing`; the gutter is
        estimated for a square filled to :data:`PEEL_FILL_GUESS`);
 
-    neither when a piece's energy is above ``sd_max`` and its chart's.
+    in both, a piece whose energy is above ``sd_max`` and its chart's joins the piece next to
+    it, or the chart stays whole.
 
     The maps are kept (restricted to the pieces)."""
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))

@@ -679,13 +679,15 @@ def _within_bound(out: list | None, res: CutResult, param, sd_max: float, name: 
     bound = max(sd_max, param.distortion.get("sym_dirichlet", np.inf))
     if out is None:
         return whole
-    A = face_adjacency(res.F).tocoo()
+    A = None  # face adjacency, built only when a piece is over the bound
     while True:
         sds = np.array([q.distortion.get("sym_dirichlet", np.inf) for *_, q in out])
         if sds.max() <= bound:
             return out
         if len(out) <= 2:
             return whole
+        if A is None:
+            A = face_adjacency(res.F).tocoo()
         piece = np.full(len(res.F), -1, dtype=np.int64)
         for k, (faces, _, _) in enumerate(out):
             piece[faces] = k

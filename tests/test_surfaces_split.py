@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from igl_heatseg.mesh.geometry import face_normals
 from igl_heatseg.surfaces import refine as R
-from igl_heatseg.surfaces.split import cylinder_from_normals, ransac_regions
+from igl_heatseg.surfaces.split import crease_regions, cylinder_from_normals, ransac_regions
 from igl_heatseg.surfaces.tolerance import vertex_tolerance
 
 
@@ -114,3 +114,60 @@ def test_fold_weak_keeps_a_piece_its_surface():
     out, out_fits = fold_weak(V, F, TT, tol, None, FN, parts, fits)
     assert np.array_equal(np.sort(out[0]), wall) and out_fits[0].kind == "cylinder"
     assert len(out) == 1 + len(rim)
+
+
+def revolved(profile, n=96):
+    """A surface of revolution about z, one row of quads (two triangles each) per segment of
+    the ``(r, z)`` profile polyline, ``n`` around; returns V, F and each face's profile
+    segment."""
+    t = 2 * np.pi * np.arange(n) / n
+    V = np.vstack([np.c_[r * np.cos(t), r * np.sin(t), np.full(n, z)] for r, z in profile])
+    j = np.arange(n)
+    F = np.vstack([np.r_[np.c_[i * n + j, i * n + (j + 1) % n, (i + 1) * n + (j + 1) % n],
+                         np.c_[i * n + j, (i + 1) * n + (j + 1) % n, (i + 1) * n + j]]
+                   for i in range(len(profile) - 1)]).astype(np.int64)
+    return V, F, np.repeat(np.arange(len(profile) - 1), 2 * n)
+
+
+# a thread ridge of a clean bolt: a cone flank, a cylinder crest and a cone flank, each one row
+RIDGE = [(10.0, 0.0), (10.9, 0.5), (10.9, 0.8), (10.0, 1.3)]
+
+
+def test_crease_regions_cut_a_thread_ridge_into_its_three_faces():
+    V, F, truth = revolved(RIDGE)  # one row per face: cone, cylinder, cone
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    region = crease_regions(V, F, np.arange(len(F)), vertex_tolerance(V, F), TT)
+    assert len(np.unique(region)) == 3
+    assert all(len(np.unique(region[truth == k])) == 1 for k in range(3))
+
+
+def test_an_exact_thread_ridge_that_growth_shatters_is_split_at_its_creases(data_dir):
+    """A ridge of a clean generated bolt (two cone flanks and a cylinder crest, 686 faces, a
+    few triangles wide): region growing breaks the flanks into pieces of 8-12 faces that are
+    no evidence, and the refinement left it one freeform segment (7 of them on that bolt)."""
+    d = np.load(data_dir / "bolt_thread_ridge.npz")
+    V, F, truth = d["V"], d["F"], d["truth"]
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    FN = face_normals(V, F)
+    faces = np.arange(len(F))
+    tol = 8.2e-4  # the whole bolt's vertex_tolerance (this piece alone reads as noisy)
+    assert len(np.unique(R.grow_regions(V, F, faces, tol, FN, TT))) > 3
+    parts, fits = R._split(V, F, faces, tol, FN, TT, None, R.SPLIT_RMS_RATIO, True, set())
+    assert sorted(f.kind for f in fits) == ["cone", "cone", "cylinder"]
+    assert sorted(len(np.unique(truth[p])) for p in parts) == [1, 1, 1]
+    assert all(f.rms < 1e-2 * tol for f in fits)
+
+
+def test_crease_regions_leave_whole_what_a_crease_does_not_cut_into_surfaces():
+    # rows of a smooth profile, each exactly a cone, turning by less than a crease (a quarter
+    # circle in 6 rows: 15 degrees); the ridge with its crest bent into two cones but one
+    # flank bent too (a piece that is no analytic surface); a plane strip folded by 30 degrees
+    # with one triangle of its fold line turned (the cut leaves one piece)
+    quarter = [(10 + np.sin(a), 1 - np.cos(a)) for a in np.linspace(0, np.pi / 2, 7)]
+    V, F, _ = revolved(quarter)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    assert (crease_regions(V, F, np.arange(len(F)), vertex_tolerance(V, F), TT) == 0).all()
+    V, F, truth = revolved(RIDGE)
+    V[F[truth == 0][::7]] += [0, 0, 0.05]  # the first flank off its cone
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    assert (crease_regions(V, F, np.arange(len(F)), vertex_tolerance(V, F), TT) == 0).all()

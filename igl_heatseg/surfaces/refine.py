@@ -64,6 +64,7 @@ from .split import (
     SPLIT_RMS_RATIO,
     SPLIT_RMS_RATIO_NOISY,
     consistent_faces,
+    crease_regions,
     evidence,
     face_pieces,
     fold_weak,
@@ -495,7 +496,9 @@ def _face_connected(F, labels, TT=None) -> np.ndarray:
 
 def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
     """Region growing, then on a noisy mesh RANSAC
-    (:func:`~igl_heatseg.surfaces.split.ransac_regions`), until one finds real faces
+    (:func:`~igl_heatseg.surfaces.split.ransac_regions`) and on an exact tessellation a cut at
+    the set's own creases (:func:`~igl_heatseg.surfaces.split.crease_regions`: one-row strips,
+    which growth cannot seed), until one finds real faces
     (:func:`~igl_heatseg.surfaces.split.real_split`); else ``(None, None)``, and the face set's
     digest goes into ``unsplit``, whose sets are not tried again (the split
     is deterministic; a smooth scan's second pass repeated half its refinement). On an exact
@@ -504,9 +507,11 @@ def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
     key = hashlib.blake2b(np.asarray(faces, dtype=np.int64).tobytes(), digest_size=16).digest()
     if key in unsplit:
         return None, None
-    for how in ("grow",) if exact else ("grow", "ransac"):
+    for how in ("grow", "crease") if exact else ("grow", "ransac"):
         if how == "grow":
             sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact)
+        elif how == "crease":
+            sub = crease_regions(V, F, faces, tol, TT, W, FN)
         else:
             sub = ransac_regions(V, F, faces, tol, FN, TT, W)
         parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ..mesh.geometry import face_areas
+from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .model import Surface
 from .segment_fit import (
@@ -34,6 +34,7 @@ from .segment_fit import (
 
 __all__ = [
     "ransac_regions",
+    "crease_regions",
     "consistent_faces",
     "face_pieces",
     "cylinder_from_normals",
@@ -264,6 +265,100 @@ def ransac_regions(V, F, faces, tol, FN, TT, W=None) -> np.ndarray:
     if len(rest):
         out[rest] = r + face_pieces(F, TT, faces[rest])
     return out
+
+
+#: crease_regions: the edges cut are those above the widest gap between the segment's dihedral
+#: angles, when the angles above it are at least this multiple of those below (the facets of
+#: a tessellated curve turn by their angular step, a crease by its own angle) ...
+CREASE_GAP_RATIO = 2.0
+#: ... and at least this angle. Where every vertex is on a border (one-row strips) nothing but
+#: the angle tells a crease from the rows of a smooth surface of revolution, each exactly a
+#: cone: the shallowest crease looked for is a thread's (flank to crest 30 degrees for a
+#: 60-degree thread; 32-34 between the facets of a clean bolt), the rows of a quarter circle in
+#: six turn by 15.
+CREASE_MIN_ANGLE = math.radians(25.0)
+
+
+def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
+    """Split a face set of an exact tessellation at its creases, the crease angle read from it.
+
+    The angles between adjacent face normals inside the set are sorted; the edges above the
+    widest gap between consecutive angles (when those above it are at least
+    :data:`CREASE_GAP_RATIO` times the largest below and :data:`CREASE_MIN_ANGLE`) are cut,
+    and each edge-connected piece left is a region. The split is kept only when every piece is one analytic surface, fitted
+    within SPLIT_RMS_RATIO x tol, and the fit is evidence (:func:`evidence`: SPLIT_NOISY_SAMPLES
+    x its parameters in vertices, so that single facets, which fit a plane exactly, are no
+    regions); else the set is one region. A thread ridge of one-row strips (a cone, a cylinder
+    and a cone, facets turning by 5 degrees and creases by 32), which region growing cannot
+    seed (every vertex is on a border), is split this way; a freeform blend, whose pieces are no
+    analytic surface, stays whole.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Positions (exact: normals and distances are taken here).
+    F : (m, 3) int64
+    faces : (k,) int64
+        The face set (a segment).
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        ``igl.triangle_triangle_adjacency(F)[0]``.
+    W, FN : optional
+        As for :func:`~igl_heatseg.surfaces.segment_fit.fit_faces` (the pieces' fits).
+
+    Returns
+    -------
+    region : (k,) int64
+        Region id of each face of ``faces``, ``0..r-1`` (all 0 when not split).
+
+    Examples
+    --------
+    A strip folded 30 degrees along a line of its edges is cut there:
+
+    >>> import numpy as np, igl
+    >>> from scipy.spatial import Delaunay
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 9), np.linspace(0, 1, 5))
+    >>> V = np.c_[x.ravel(), y.ravel(), np.tan(np.radians(30)) * np.maximum(x.ravel(), 0)]
+    >>> F = Delaunay(V[:, :2]).simplices.astype(np.int64)
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> np.bincount(crease_regions(V, F, np.arange(len(F)), 1e-6, TT))
+    array([32, 32])
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    one = np.zeros(len(faces), dtype=np.int64)
+    inside = np.zeros(len(F), dtype=bool)
+    inside[faces] = True
+    a, b = np.repeat(faces, 3), TT[faces].ravel()
+    ok = b >= 0
+    ok[ok] = inside[b[ok]]
+    a, b = a[ok], b[ok]
+    if len(a) < 2:
+        return one
+    N = np.zeros((len(F), 3))
+    N[faces] = face_normals(V, F[faces])
+    ang = np.arccos(np.clip(np.einsum("ij,ij->i", N[a], N[b]), -1.0, 1.0))
+    u = np.unique(ang)[::-1]
+    if len(u) < 2:
+        return one
+    i = int(np.argmax(u[:-1] - u[1:]))
+    if u[i] < max(CREASE_GAP_RATIO * u[i + 1], CREASE_MIN_ANGLE):
+        return one
+    cut = ang > 0.5 * (u[i] + u[i + 1])
+    TTc = TT.copy()
+    fa, fb = a[cut], b[cut]
+    for j in range(3):  # each pair cut is listed from both of its faces
+        hit = TTc[fa, j] == fb
+        TTc[fa[hit], j] = -1
+    region = face_pieces(F, TTc, faces)
+    if region.max() == 0:
+        return one
+    for r in range(int(region.max()) + 1):
+        part = faces[region == r]
+        s = fit_faces(V, F, part, tol, W=W, FN=FN)
+        if not (s.is_analytic and s.rms <= SPLIT_RMS_RATIO * tol and evidence(F, part, s)):
+            return one
+    return region
 
 
 def evidence(F, part, s) -> bool:

@@ -285,13 +285,15 @@ def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
     The angles between adjacent face normals inside the set are sorted; the edges above the
     widest gap between consecutive angles (when those above it are at least
     :data:`CREASE_GAP_RATIO` times the largest below and :data:`CREASE_MIN_ANGLE`) are cut,
-    and each edge-connected piece left is a region. The split is kept only when every piece is one analytic surface, fitted
-    within SPLIT_RMS_RATIO x tol, and the fit is evidence (:func:`evidence`: SPLIT_NOISY_SAMPLES
-    x its parameters in vertices, so that single facets, which fit a plane exactly, are no
-    regions); else the set is one region. A thread ridge of one-row strips (a cone, a cylinder
-    and a cone, facets turning by 5 degrees and creases by 32), which region growing cannot
-    seed (every vertex is on a border), is split this way; a freeform blend, whose pieces are no
-    analytic surface, stays whole.
+    and each edge-connected piece left is a region. The split is kept only when every piece is
+    one analytic surface, fitted within SPLIT_RMS_RATIO x tol, and the fit is evidence
+    (:func:`evidence`: SPLIT_NOISY_SAMPLES x its parameters in vertices, so that single
+    facets, which fit a plane exactly, are no regions); else the set is one region.
+
+    A clean bolt's thread ridge (a cone flank, a cylinder crest and a cone flank, a few
+    triangles wide; facets turning by 5 degrees, creases by 32) is split this way, where region
+    growing breaks the flanks into pieces of 8-12 faces that are no evidence; a freeform blend,
+    whose pieces are no analytic surface, stays whole.
 
     Parameters
     ----------

@@ -762,3 +762,47 @@ def test_fit_of_a_segment_whose_one_face_holds_nearly_all_its_area():
     P, N, w = vertex_samples(V, F, np.zeros(0, np.int64))
     assert P.shape == N.shape == (0, 3) and w.shape == (0,)
     assert N.dtype == w.dtype == np.float64
+
+
+def _noisy_revolved(profile, sigma, seed, rings=14, around=48):
+    """A band of a surface of revolution about z, ``(r, z) = profile(t)`` for ``t`` in
+    ``[0, 1]``, with Gaussian noise ``sigma`` on every vertex; returns noisy V, F and the clean
+    positions (for the normals, as the robust pipeline's denoised copy)."""
+    t, ph = np.meshgrid(np.linspace(0, 1, rings), 2 * np.pi * np.arange(around) / around,
+                        indexing="ij")
+    r, z = profile(t.ravel())
+    W = np.c_[r * np.cos(ph.ravel()), r * np.sin(ph.ravel()), z]
+    V = W + np.random.default_rng(seed).normal(scale=sigma, size=W.shape)
+    idx = np.arange(len(W)).reshape(t.shape)
+    nxt = np.roll(idx, -1, axis=1)
+    a, b, c, d = idx[:-1].ravel(), idx[1:].ravel(), nxt[1:].ravel(), nxt[:-1].ravel()
+    return V, np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64), W
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("sigma", [0.3, 0.4])
+def test_a_noisy_dome_is_a_sphere_though_a_cone_is_within_tolerance(seed, sigma):
+    """A spherical cap (radius 20, 5 to 50 degrees from the pole) with noise 0.3-0.4 and a
+    tolerance of 2.5 noise levels: a cone is within tolerance (RMS 0.6-0.8 tol) and is tried
+    first, but the sphere, with fewer parameters, fits 1.5 times closer. A cone band of the
+    same size stays a cone (no sphere is within tolerance of it)."""
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    def cap(t):
+        a = np.radians(5 + 45 * t)
+        return 20 * np.sin(a), 20 * np.cos(a)
+
+    def cone(t):
+        a = np.radians(5 + 45 * t)
+        return 20 * np.sin(a), -16 * np.sin(a)
+
+    tol = 2.5 * sigma
+    V, F, W = _noisy_revolved(cap, sigma, seed)
+    faces = np.arange(len(F))
+    c = fit_faces(V, F, faces, tol, kinds=("cone",), W=W)
+    assert c.kind == "cone" and c.rms <= tol  # the cone alone is within tolerance
+    s = fit_faces(V, F, faces, tol, W=W)
+    assert s.kind == "sphere" and abs(s.params["radius"] - 20) < 0.5
+    assert s.rms * 1.3 <= c.rms
+    V, F, W = _noisy_revolved(cone, sigma, seed)
+    assert fit_faces(V, F, np.arange(len(F)), tol, W=W).kind == "cone"

@@ -34,6 +34,15 @@ BEAT_ABS = 0.25
 #: thousands of Gaussian residuals is ~4 sigma; a bump or a wrong kind shows up in max_dev).
 MAX_DEV_FACTOR = 3.0
 
+#: fit_surface: a cone within tolerance gives way to a sphere (4 parameters against 6, tried
+#: after it) within tolerance whose RMS is this many times lower, on at least
+#: SPHERE_MIN_SAMPLES points. Nested in neither direction, the two fit a narrow band of either
+#: equally (RMS ratio 0.9-1.16 over the true cones of 50+ faces of the tuning parts); a noisy
+#: dome (noise 0.2 edge) is within tolerance of a cone too, at 1.5-1.6 times the sphere's RMS.
+SPHERE_OVER_CONE = 1.3
+#: ... four samples per parameter of the cone (a dozen noisy faces fit anything).
+SPHERE_MIN_SAMPLES = 24
+
 #: fit_surface: a candidate whose normals agree with the data's less than this (weighted mean
 #: |cos| of the angle; 0.8 ~ 37 degrees on average, far beyond the face-normal noise of a scan
 #: fitted within tolerance) is rejected whatever its distances: a fan cap and a cylinder ring
@@ -136,7 +145,9 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS,
     a more complex kind always fits a little better and must beat the noise to be chosen. The
     search stops at the first candidate within tolerance (``rms <= tol`` and
     ``max_dev <= MAX_DEV_FACTOR * tol``) and returns the current choice (that candidate, or a
-    simpler kind it does not clearly beat, whose rms is then below BEAT_FACTOR * tol); when
+    simpler kind it does not clearly beat, whose rms is then below BEAT_FACTOR * tol), except
+    that a cone gives way to a sphere (fewer parameters, tried after it) within tolerance that
+    fits SPHERE_OVER_CONE times closer on SPHERE_MIN_SAMPLES points or more; when
     none is within tolerance the result is ``freeform`` (with the best candidate's rms and
     max_dev, or nan). Candidates still above GIVE_UP_FACTOR * tol after LM_GIVE_UP_AFTER
     iterations stop refining once they creep (a wrong kind; its rms only ranks it). A candidate
@@ -203,9 +214,22 @@ def fit_surface(P, N, w=None, tol: float | None = None, kinds=SURFACE_KINDS,
         if _ok(s, tol):
             log.debug("fit_surface: %s (rms %.3g, tol %.3g; %s within)", chosen.kind,
                       chosen.rms, tol, kind)
+            if chosen.kind == "cone" and "sphere" in kinds and len(P) >= SPHERE_MIN_SAMPLES:
+                chosen = _sphere_over_cone(chosen, P, N, wn, tol, candidates)
             return _with_area(chosen, w)
     rms, dev = (best.rms, best.max_dev) if best is not None else (math.nan, math.nan)
     return Surface("freeform", {"centroid": m}, rms=rms, max_dev=dev, area=weights_area(w))
+
+
+def _sphere_over_cone(cone: Surface, P, N, wn, tol, candidates) -> Surface:
+    """The sphere fitted to the points when it is within tolerance and fits clearly closer than
+    the chosen cone (:data:`SPHERE_OVER_CONE`); else the cone."""
+    s = fit_sphere(P, N, wn, give_up_rms=GIVE_UP_FACTOR * tol)
+    if s is None or _normal_agreement(s, P, N, wn) < NORMAL_AGREEMENT:
+        return cone
+    if candidates is not None:
+        candidates.append(s)
+    return s if _ok(s, tol) and s.rms * SPHERE_OVER_CONE <= cone.rms else cone
 
 
 def _normal_agreement(s: Surface, P, N, wn) -> float:

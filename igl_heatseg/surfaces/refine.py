@@ -497,8 +497,9 @@ def _face_connected(F, labels, TT=None) -> np.ndarray:
 def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
     """Region growing, then on a noisy mesh RANSAC
     (:func:`~igl_heatseg.surfaces.split.ransac_regions`) and on an exact tessellation a cut at
-    the set's own creases (:func:`~igl_heatseg.surfaces.split.crease_regions`: one-row strips,
-    which growth cannot seed), until one finds real faces
+    the set's own creases (:func:`~igl_heatseg.surfaces.split.crease_regions`: faces a few
+    triangles wide, which growth breaks into pieces that are no evidence), until one finds
+    real faces
     (:func:`~igl_heatseg.surfaces.split.real_split`); else ``(None, None)``, and the face set's
     digest goes into ``unsplit``, whose sets are not tried again (the split
     is deterministic; a smooth scan's second pass repeated half its refinement). On an exact

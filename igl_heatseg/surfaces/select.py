@@ -37,8 +37,9 @@ MAX_DEV_FACTOR = 3.0
 #: fit_surface: a cone within tolerance gives way to a sphere (4 parameters against 6, tried
 #: after it) within tolerance whose RMS is this many times lower, on at least
 #: SPHERE_MIN_SAMPLES points. Nested in neither direction, the two fit a narrow band of either
-#: equally (RMS ratio 0.9-1.16 over the true cones of 50+ faces of the tuning parts); a noisy
-#: dome (noise 0.2 edge) is within tolerance of a cone too, at 1.5-1.6 times the sphere's RMS.
+#: about equally (on the 24 true cones of 50+ faces of the tuning parts, the cone's RMS is
+#: 0.41-1.11 times the sphere's); a noisy dome (noise 0.2 edge) is within tolerance of a cone
+#: too, at 1.5-1.6 times the sphere's RMS.
 SPHERE_OVER_CONE = 1.3
 #: ... four samples per parameter of the cone (a dozen noisy faces fit anything).
 SPHERE_MIN_SAMPLES = 24

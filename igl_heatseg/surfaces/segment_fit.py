@@ -16,7 +16,7 @@ import numpy as np
 from ..mesh.geometry import face_areas, face_normals
 from .model import SURFACE_KINDS, Surface
 from .samples import normal_positions, vertex_samples
-from .select import SPHERE_OVER_CONE, fit_surface
+from .select import fit_surface, sphere_over_cone
 from .tolerance import vertex_tolerance
 
 __all__ = [
@@ -158,7 +158,7 @@ def _simpler_on_most(V, F, faces, tol, s: Surface, tried: list, W, FN) -> Surfac
     to the neighbour they lie on by the boundary moves. A cone is not taken over a sphere
     that fits it :data:`~.select.SPHERE_OVER_CONE` times closer (a noisy dome)."""
     rank = SURFACE_KINDS.index
-    for c in (c for c in tried if rank(c.kind) < rank(s.kind) and not _sphere_over(s, c)):
+    for c in (c for c in tried if rank(c.kind) < rank(s.kind) and not sphere_over_cone(s, c)):
 
         def refit(sub, kind=c.kind):
             return _kind_on(V, F, sub, tol, kind, W)
@@ -170,12 +170,6 @@ def _simpler_on_most(V, F, faces, tol, s: Surface, tried: list, W, FN) -> Surfac
         if t is not None and normals_agree(V, F, FN, faces[on], t, raw=W is not None):
             return t
     return s
-
-
-def _sphere_over(s: Surface, c: Surface) -> bool:
-    """A sphere ``s`` fitting SPHERE_OVER_CONE times closer than the cone ``c`` (fewer
-    parameters: the cone, tried first, is no simpler; see :func:`fit_surface`)."""
-    return s.kind == "sphere" and c.kind == "cone" and s.rms * SPHERE_OVER_CONE <= c.rms
 
 
 def _kind_on(V, F, faces, tol, kind, W) -> Surface | None:

@@ -16,7 +16,7 @@ from .lm import normalise, subsample
 from .model import SURFACE_KINDS, Surface
 from .primitives import fit_cone, fit_cylinder, fit_plane, fit_sphere, fit_torus
 
-__all__ = ["fit_surface", "surface_residual", "within_tolerance"]
+__all__ = ["fit_surface", "surface_residual", "within_tolerance", "sphere_over_cone"]
 
 log = logging.getLogger(__name__)
 
@@ -230,7 +230,22 @@ def _sphere_over_cone(cone: Surface, P, N, wn, tol, candidates) -> Surface:
         return cone
     if candidates is not None:
         candidates.append(s)
-    return s if _ok(s, tol) and s.rms * SPHERE_OVER_CONE <= cone.rms else cone
+    return s if _ok(s, tol) and sphere_over_cone(s, cone) else cone
+
+
+def sphere_over_cone(s: Surface, c: Surface) -> bool:
+    """Whether ``s`` is a sphere fitting SPHERE_OVER_CONE times closer than the cone ``c`` (the
+    sphere, with fewer parameters, then wins although the cone is tried first).
+
+    Examples
+    --------
+    >>> sph = Surface("sphere", {"center": np.zeros(3), "radius": 1.0}, rms=0.1)
+    >>> cone = Surface("cone", {"apex": np.zeros(3), "axis": np.array([0., 0, 1]),
+    ...                         "half_angle": 0.5}, rms=0.2)
+    >>> sphere_over_cone(sph, cone), sphere_over_cone(cone, sph)
+    (True, False)
+    """
+    return s.kind == "sphere" and c.kind == "cone" and s.rms * SPHERE_OVER_CONE <= c.rms
 
 
 def _normal_agreement(s: Surface, P, N, wn) -> float:

@@ -404,6 +404,32 @@ def test_a_face_the_mesher_strays_on_is_meshed_again_finer(tmp_path, data_dir):
     assert fidelity._mesh_again_finer(face, finer) == finer  # a good mesh is kept
 
 
+def test_a_wiggly_b_spline_stand_in_is_meshed_without_endless_refinement(tmp_path, data_dir):
+    """A B-spline stand-in fitted to a noisy plane (59 x 52 poles, trimmed by 56 edges; the
+    real face of tuning bolt_s1007_irregular_n0.2) wiggles below the measurement deflection:
+    OCC's mesher at its default smallest triangle side (0.1 deflections) refined it to 14,000
+    triangles over 67-183 s, more than half of the part's `cad` run. With sides of at least
+    MESH_MIN_SIZE deflections it meets the deflection with under half the triangles."""
+    import gzip
+
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRepTools import BRepTools
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS, TopoDS_Shape
+
+    from igl_heatseg.cad import fidelity
+
+    path = tmp_path / "standin.brep"
+    path.write_bytes(gzip.decompress((data_dir / "bspline_standin_slow_mesh.brep.gz").read_bytes()))
+    shape = TopoDS_Shape()
+    assert BRepTools.Read_s(shape, str(path), BRep_Builder())
+    face, d = TopoDS.Face(shape), 0.2883
+    assert fidelity.mesh_faces(face, d) == d
+    tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
+    assert 0 < tri.NbTriangles() < 7000
+    assert tri.Deflection() <= d
+
+
 def test_step_round_trip(tmp_path):
     V, F, labels = box_mesh(3)
     res = build_brep(V, F, labels, box_planes())

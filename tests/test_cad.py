@@ -404,12 +404,15 @@ def test_a_face_the_mesher_strays_on_is_meshed_again_finer(tmp_path, data_dir):
     assert fidelity._mesh_again_finer(face, finer) == finer  # a good mesh is kept
 
 
-def test_a_wiggly_b_spline_stand_in_is_meshed_without_endless_refinement(tmp_path, data_dir):
+def test_a_wiggly_b_spline_stand_in_is_meshed_to_its_deflection_with_no_tiny_triangles(
+        tmp_path, data_dir):
     """A B-spline stand-in fitted to a noisy plane (59 x 52 poles, trimmed by 56 edges; the
-    real face of tuning bolt_s1007_irregular_n0.2) wiggles below the measurement deflection:
-    OCC's mesher at its default smallest triangle side (0.1 deflections) refined it to 14,000
-    triangles over 67-183 s, more than half of the part's `cad` run. With sides of at least
-    MESH_MIN_SIZE deflections it meets the deflection with under half the triangles."""
+    real face of tuning bolt_s1007_irregular_n0.2) wiggles below the measurement deflection.
+    OCC's mesher at its default smallest triangle size (0.1 deflections) worked on it for
+    67-183 s, more than half of the part's `cad` run (the speed target is
+    ``benchmarks/bench_fidelity_mesh.py``). The measurement tessellation keeps its triangles
+    to MESH_MIN_SIZE deflections (its shortest sides: a 0.1 % quantile of 0.103 deflections
+    at OCC's default, 0.137 with the package's 0.15) and still meets the deflection."""
     import gzip
 
     from OCP.BRep import BRep_Builder, BRep_Tool
@@ -426,8 +429,13 @@ def test_a_wiggly_b_spline_stand_in_is_meshed_without_endless_refinement(tmp_pat
     face, d = TopoDS.Face(shape), 0.2883
     assert fidelity.mesh_faces(face, d) == d
     tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
-    assert 0 < tri.NbTriangles() < 7000
-    assert tri.Deflection() <= d
+    assert tri.NbTriangles() > 0 and tri.Deflection() <= d
+    P = np.array([[tri.Node(i).X(), tri.Node(i).Y(), tri.Node(i).Z()]
+                  for i in range(1, tri.NbNodes() + 1)])
+    T = np.array([[tri.Triangle(i).Value(k) for k in (1, 2, 3)]
+                  for i in range(1, tri.NbTriangles() + 1)]) - 1
+    sides = np.linalg.norm(P[T] - P[np.roll(T, 1, axis=1)], axis=2)
+    assert np.quantile(sides, 0.001) >= 0.8 * fidelity.MESH_MIN_SIZE * d
 
 
 def test_step_round_trip(tmp_path):

@@ -24,9 +24,10 @@ from OCP.TopAbs import TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp_Explorer  # noqa: E402
 from OCP.TopoDS import TopoDS, TopoDS_Shell  # noqa: E402
 
-from .fidelity import face_area, faces_of, shape_analysis, shell_of, shells_of  # noqa: E402
+from .fidelity import face_area, faces_of, shell_of, shells_of  # noqa: E402
 from .sew import orientation_conflicts  # noqa: E402
 from .step import read_step, step_uncertainty, write_step  # noqa: E402
+from .validity import shape_analysis  # noqa: E402
 
 __all__ = ["invalid_faces"]
 

@@ -35,11 +35,11 @@ from .fidelity import (  # noqa: E402
     count_free_edges,
     face_area,
     faces_of,
-    shape_valid,
     shell_of,
     shells_of,
 )
 from .pcurves import mend_pcurves  # noqa: E402
+from .validity import shape_valid  # noqa: E402
 
 logger = logging.getLogger(__name__)
 

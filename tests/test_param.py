@@ -653,3 +653,32 @@ def test_a_tutte_map_that_flips_with_mean_value_weights_is_made_with_uniform_one
     p = parameterize_chart(V, F)
     assert p.bijective and certify_map(p.UV, F).bijective
     assert any(a["method"] == "tutte" and a["bijective"] for a in p.attempts)
+
+
+def test_a_chart_with_no_bijective_map_is_split_until_its_pieces_have_one(data_dir):
+    """The Tutte maps of this noisy chart (data/CREDITS.md) collapse a region to triangles of
+    1e-31 of the circle's area (flips with mean value and with uniform weights) and its
+    Hessian maps flip: it had no bijective map. Split along a seam through its most stretched
+    region, both halves get one."""
+    from igl_heatseg.parameterization.bijectivity import certify_map
+    from igl_heatseg.parameterization.cut import cut_to_disk
+    from igl_heatseg.parameterization.fallback import tutte_map
+    from igl_heatseg.parameterization.split import parameterize_pieces
+
+    d = np.load(data_dir / "chart_tutte_collapses.npz")
+    V, F = d["V"], d["F"].astype(np.int64)
+    assert not certify_map(tutte_map(V, F, weights="uniform"), F).bijective
+    res = cut_to_disk(V, F)
+
+    def param(Vp, Fp, name, start):
+        return parameterize_chart(Vp, Fp, name=name, start_uv=start)
+
+    whole = parameterize_pieces(res, param, split_unmapped=False)
+    assert len(whole) == 1 and not whole[0][2].bijective
+    out = parameterize_pieces(res, param)
+    assert len(out) >= 2
+    assert np.array_equal(np.sort(np.concatenate([rows for rows, _, _ in out])), np.arange(len(F)))
+    for _, piece, q in out:
+        assert q.bijective and certify_map(q.UV, piece.F).bijective
+        assert q.distortion["sym_dirichlet"] < 6
+

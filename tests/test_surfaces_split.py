@@ -242,3 +242,18 @@ def test_crease_regions_split_ridges_of_24_facets_into_their_faces(profile):
     assert all(len(np.unique(region[truth == k])) == 1 for k in range(len(profile) - 1))
     kinds = [fit_faces(V, F, np.flatnonzero(region == r), tol).kind for r in np.unique(region)]
     assert set(kinds) == {"cone", "cylinder"}
+
+
+def test_profile_rows_follow_the_profile_across_the_inner_equator_of_the_tube():
+    """A concave fillet lies on the inner side of its tube, where the angle around the tube
+    passes +-180 degrees: its rows are numbered along the profile all the same (on
+    f16 flange_s16008_coarse_n0, rows numbered across the cut made a fillet freeform)."""
+    from igl_heatseg.surfaces.model import Surface
+    from igl_heatseg.surfaces.profile import profile_rows
+
+    prof = [(11.0 + np.cos(a), np.sin(a)) for a in np.radians([150.0, 170.0, 190.0, 210.0])]
+    V, F, seg = revolved(prof, n=24)
+    s = Surface("torus", {"center": np.zeros(3), "axis": np.array([0.0, 0, 1]),
+                          "major_radius": 11.0, "minor_radius": 1.0})
+    verts, row = profile_rows(V, F, np.arange(len(F)), s)
+    assert np.array_equal(row, np.repeat(np.arange(4), 24)[verts])

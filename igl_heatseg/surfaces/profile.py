@@ -12,8 +12,8 @@ bolt_s18012_frontal_n0: every ridge one torus, RMS 0).
 What tells a coarse blend from such a ridge is how it meets its neighbours. A fillet is
 tangent to them: the faces across its first and last rows turn by about half a facet step,
 less than its facets turn at its inner rows. The ridge's flanks meet the next groove at a
-crease twice as sharp as its inner ones. :func:`torus_evidence` takes a torus on at most
-:data:`FEW_ROWS` rows only when both its end rows are that tangent.
+crease twice as sharp as its inner ones. :func:`torus_evidence` refuses a torus on at most
+:data:`FEW_ROWS` rows when an end row is such a crease.
 """
 
 from __future__ import annotations
@@ -85,7 +85,9 @@ def profile_rows(V, F, faces, s: Surface):
     d = V[verts] - p["center"]
     z = d @ p["axis"]
     rho = np.linalg.norm(d - np.outer(z, p["axis"]), axis=1)
-    arc = p["minor_radius"] * np.arctan2(z, rho - p["major_radius"])
+    x, y = rho - p["major_radius"], z  # in the tube's circle; angles from the mean direction
+    mx, my = np.mean(x), np.mean(y)  # (not from atan2's cut: a concave fillet straddles it)
+    arc = p["minor_radius"] * np.arctan2(mx * y - my * x, mx * x + my * y)
     E = np.sort(np.r_[F[faces][:, [0, 1]], F[faces][:, [1, 2]], F[faces][:, [2, 0]]], axis=1)
     h = float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
     order = np.argsort(arc, kind="stable")
@@ -104,11 +106,12 @@ def profile_rows(V, F, faces, s: Surface):
 def torus_evidence(V, F, faces, s: Surface, FN) -> bool:
     """Whether a torus fit of ``faces`` is evidence of a torus, not of rows that any torus fits.
 
-    True on rows that are not exact (:func:`profile_rows` gives None) and on more than
-    :data:`FEW_ROWS` rows; False on two rows or fewer. On three or four rows, True only when
-    the faces across each end row turn by at most :data:`TANGENT_RATIO` x the turn across
-    the inner rows (medians): a blend tangent to its neighbours, not a ridge between creases;
-    False without neighbours to judge by.
+    False on two rows or fewer (one band of faces: a cone). On three or four exact rows, False
+    when the faces across an end row turn, in the median, by more than :data:`TANGENT_RATIO` x
+    the median turn across the inner rows: a ridge between creases, not a blend tangent to its
+    neighbours. Else True: on rows that are not exact (:func:`profile_rows` gives None), on
+    more than :data:`FEW_ROWS` rows, and where no end row is a crease (no neighbour across
+    it, or the set's border does not follow the rows).
 
     Parameters
     ----------
@@ -129,22 +132,23 @@ def torus_evidence(V, F, faces, s: Surface, FN) -> bool:
 
     Examples
     --------
-    A band of three rows of a tube, alone (no neighbours to judge it by: its rows are no
-    evidence beyond the three rows that any torus fits):
+    A thread ridge (a cone flank, a cylinder crest, a cone flank; 24 facets per turn) and the
+    next flank across the valley; the ridge's rows lie on a torus:
 
     >>> import numpy as np
     >>> from igl_heatseg.mesh.geometry import face_normals
-    >>> from igl_heatseg.surfaces.model import Surface
-    >>> t, a = np.linspace(0, 2 * np.pi, 24, endpoint=False), np.radians([-30, 0, 30])
-    >>> V = np.array([[(3 + np.cos(b)) * np.cos(u), (3 + np.cos(b)) * np.sin(u), np.sin(b)]
-    ...               for b in a for u in t])
-    >>> F = np.array([f for i in range(2) for j in range(24) for f in (
+    >>> from igl_heatseg.surfaces.select import fit_surface
+    >>> from igl_heatseg.surfaces.samples import vertex_samples
+    >>> t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    >>> prof = [(9.95, 0.0), (10.68, 0.97), (10.68, 1.45), (9.95, 2.42), (10.68, 3.39)]
+    >>> V = np.array([[r * np.cos(u), r * np.sin(u), z] for r, z in prof for u in t])
+    >>> F = np.array([f for i in range(4) for j in range(24) for f in (
     ...     [24 * i + j, 24 * i + (j + 1) % 24, 24 * (i + 1) + j],
     ...     [24 * i + (j + 1) % 24, 24 * (i + 1) + (j + 1) % 24, 24 * (i + 1) + j])])
-    >>> s = Surface("torus", {"center": np.zeros(3), "axis": np.array([0.0, 0, 1]),
-    ...                       "major_radius": 3.0, "minor_radius": 1.0})
-    >>> torus_evidence(V, F, np.arange(len(F)), s, face_normals(V, F))
-    False
+    >>> ridge = np.arange(3 * 48)
+    >>> s = fit_surface(*vertex_samples(V, F, ridge), tol=1e-6, kinds=("torus",))
+    >>> s.kind, torus_evidence(V, F, ridge, s, face_normals(V, F))
+    ('torus', False)
     """
     faces = np.asarray(faces, dtype=np.int64)
     verts, row = profile_rows(V, F, faces, s)
@@ -175,11 +179,11 @@ def torus_evidence(V, F, faces, s: Surface, FN) -> bool:
     pair = owner[two][order].reshape(-1, 2)
     inner = turn(pair[:, 0], pair[:, 1]) if len(pair) else np.zeros(0)
     if not len(inner):
-        return False
+        return True
     # end rows: the edges of one of the faces, and the face across them outside the set
     one = first[count == 1]
-    if not len(one):  # a closed band: nothing to be tangent to
-        return False
+    if not len(one):  # the set's border does not follow its rows
+        return True
     bkey, bface, brow = key[one], owner[one], row_of[E[one, 0]]
     inside = np.zeros(len(F), dtype=bool)
     inside[faces] = True
@@ -190,8 +194,8 @@ def torus_evidence(V, F, faces, s: Surface, FN) -> bool:
     hit = np.isin(gkey, bkey)
     across = dict(zip(gkey[hit].tolist(), gface[hit].tolist(), strict=True))
     got = np.array([k in across for k in bkey.tolist()], dtype=bool)
-    if not got.any():  # no neighbours (the border of the mesh)
-        return False
+    if not got.any():  # no neighbours across the end rows (the border of the mesh)
+        return True
     out = np.array([across[k] for k in bkey[got].tolist()], dtype=np.int64)
     ends = turn(bface[got], out)
     bar = TANGENT_RATIO * float(np.median(inner))

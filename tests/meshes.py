@@ -137,3 +137,48 @@ def plane_into_cylinder(noise: float, seed: int = 0, h: float = 0.25, R: float =
                                "radius": R})
     S = np.r_[s][F].mean(axis=1)  # arc length of each face's centroid
     return V, F, S, {0: plane, 1: cyl}
+
+
+def revolved(profile, n=96):
+    """A surface of revolution about z, one row of quads (two triangles each) per segment of
+    the ``(r, z)`` profile polyline, ``n`` around; returns V, F and each face's profile
+    segment."""
+    t = 2 * np.pi * np.arange(n) / n
+    V = np.vstack([np.c_[r * np.cos(t), r * np.sin(t), np.full(n, z)] for r, z in profile])
+    j = np.arange(n)
+    F = np.vstack([np.r_[np.c_[i * n + j, i * n + (j + 1) % n, (i + 1) * n + (j + 1) % n],
+                         np.c_[i * n + j, (i + 1) * n + (j + 1) % n, (i + 1) * n + j]]
+                   for i in range(len(profile) - 1)]).astype(np.int64)
+    return V, F, np.repeat(np.arange(len(profile) - 1), 2 * n)
+
+
+def thread_profile(ridges: int):
+    """``(r, z)`` profile of ``ridges`` V-thread ridges of a clean generated bolt (held-out
+    bolt_s18012_frontal_n0): flank, crest, flank, then the next ridge from the valley; one
+    row each when revolved. The creases turn by 37 degrees (flank to crest) and 74 (the
+    valley)."""
+    prof = [(9.95, 0.0)]
+    for _ in range(ridges):
+        z = prof[-1][1]
+        prof += [(10.68, z + 0.97), (10.68, z + 1.45), (9.95, z + 2.42)]
+    return prof
+
+
+def extruded(profile, h: float, width: float = 8.0, noise: float = 0.0, seed: int = 0):
+    """The ``(x, z)`` profile polyline swept along y over ``width``, gridded at about ``h``
+    (the profile's corners are grid lines), vertices moved by Gaussian noise of ``noise``:
+    V, F, the profile segment of each face and the arc length of its centroid."""
+    P = np.asarray(profile, dtype=np.float64)
+    knots = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))]
+    s = np.unique(np.r_[np.arange(0.0, knots[-1] + 1e-9, h), knots])
+    x, z = np.interp(s, knots, P[:, 0]), np.interp(s, knots, P[:, 1])
+    y = np.arange(0.0, width + 1e-9, h)
+    ns, ny = len(s), len(y)
+    V = np.c_[np.repeat(x, ny), np.tile(y, ns), np.repeat(z, ny)]
+    idx = np.arange(ns * ny).reshape(ns, ny)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    sc = np.repeat(s, ny)[F].mean(axis=1)
+    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
+    return V, F, np.searchsorted(knots, sc) - 1, sc

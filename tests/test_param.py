@@ -553,6 +553,47 @@ def test_long_chart_of_any_size_is_cut_for_packing_into_pieces_no_longer_than_th
         assert len(out) == 4 and all(piece.bijective for _, _, piece in out)
 
 
+def _thin_ring_cut_open(n: int = 24, r: float = 10.0, w: float = 1.0, turn: float = 330.0):
+    """A flat annulus band of one row (``n`` quads over ``turn`` degrees, two triangles each),
+    radii ``r`` to ``r + w``: a thread flank's cone ring cut open, as its map lays it out."""
+    t = np.radians(np.linspace(0.0, turn, n + 1))
+    V = np.r_[np.c_[r * np.cos(t), r * np.sin(t), 0 * t],
+              np.c_[(r + w) * np.cos(t), (r + w) * np.sin(t), 0 * t]]
+    j = np.arange(n)
+    F = np.r_[np.c_[j, j + 1, n + 2 + j], np.c_[j, n + 2 + j, n + 1 + j]].astype(np.int64)
+    return V, F
+
+
+def test_a_thin_c_shaped_chart_of_few_faces_is_halved_for_packing_into_arcs():
+    """A thin ring cut open fills 0.12 of its rectangle. The box-fill rule halves it while
+    that helps; with the default size guard (40 faces) its 48 faces are halved once, with the
+    pipeline's last trial's (``PACK_HALVE_MIN_FACES``) into arcs that fill their rectangles
+    (a coarse clean bolt's 12 thread flanks: the atlas from 0.466 to 0.717)."""
+    from igl_heatseg.parameterization.cut import chart_topology, cut_to_disk
+    from igl_heatseg.parameterization.split import (
+        PACK_HALVE_MIN_FACES,
+        _box,
+        cut_for_packing,
+        split_for_packing,
+    )
+
+    V, F = _thin_ring_cut_open()
+    UV = V[:, :2]
+    whole = _box(UV, F)[3]
+    assert whole < 0.15
+    few = split_for_packing(UV, F, np.inf, big=True)
+    arcs = split_for_packing(UV, F, np.inf, big=True, min_faces=PACK_HALVE_MIN_FACES)
+    assert len(few) == 2 and len(arcs) >= 8
+    assert np.array_equal(np.sort(np.concatenate(arcs)), np.arange(len(F)))
+    for p in arcs:
+        assert chart_topology(F[p]).is_disk
+        assert _box(UV, F[p])[3] > 3 * whole
+    res = cut_to_disk(V, F)
+    out = cut_for_packing(res, parameterize_chart(res.V, res.F), max_aspect=np.inf,
+                          min_faces=PACK_HALVE_MIN_FACES)
+    assert len(out) == len(arcs) and all(q.bijective for *_, q in out)
+
+
 def test_no_piece_is_cut_for_packing_more_stretched_than_the_bound_and_its_chart():
     """A strip 40 long whose map is stretched 2.5 times along its last 4 units: the chart as
     a whole meets the per-chart bound (5), the end piece alone does not; it joins the piece

@@ -382,3 +382,16 @@ def test_long_chart_is_cut_for_packing_only_when_the_atlas_packs_tighter():
     res = run_pipeline(disk)
     assert len(res.charts) == 1 and res.charts_cut_for_packing == 0
     assert res.atlas.fill > 0.7
+
+
+def test_thread_flanks_cut_open_are_halved_into_arcs_when_the_atlas_packs_tighter():
+    """A clean threaded rod (4 V ridges, 24 facets per turn): robust mode makes every flank
+    and crest a ring, each cut open into a thin C that nests in nothing; halved into arcs
+    (``PACK_HALVE_MIN_FACES``) the atlas fills 0.755 of its square instead of 0.706."""
+    from meshes import revolved, thread_profile
+
+    V, F, _ = revolved(thread_profile(4), n=24)
+    res = run_pipeline(validate_mesh(V, F, "threaded rod"), mode="robust")
+    assert res.charts_cut_for_packing > 0
+    assert all(c.param.bijective for c in res.charts)
+    assert res.atlas.fill > 0.74

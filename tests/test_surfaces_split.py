@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from meshes import revolved, thread_profile
 
 from igl_heatseg.mesh.geometry import face_normals
 from igl_heatseg.surfaces import refine as R
@@ -117,19 +118,6 @@ def test_fold_weak_keeps_a_piece_its_surface():
     assert len(out) == 1 + len(rim)
 
 
-def revolved(profile, n=96):
-    """A surface of revolution about z, one row of quads (two triangles each) per segment of
-    the ``(r, z)`` profile polyline, ``n`` around; returns V, F and each face's profile
-    segment."""
-    t = 2 * np.pi * np.arange(n) / n
-    V = np.vstack([np.c_[r * np.cos(t), r * np.sin(t), np.full(n, z)] for r, z in profile])
-    j = np.arange(n)
-    F = np.vstack([np.r_[np.c_[i * n + j, i * n + (j + 1) % n, (i + 1) * n + (j + 1) % n],
-                         np.c_[i * n + j, (i + 1) * n + (j + 1) % n, (i + 1) * n + j]]
-                   for i in range(len(profile) - 1)]).astype(np.int64)
-    return V, F, np.repeat(np.arange(len(profile) - 1), 2 * n)
-
-
 # a thread ridge of a clean bolt: a cone flank, a cylinder crest and a cone flank, each one row
 RIDGE = [(10.0, 0.0), (10.9, 0.5), (10.9, 0.8), (10.0, 1.3)]
 
@@ -174,11 +162,7 @@ def test_crease_regions_leave_whole_what_a_crease_does_not_cut_into_surfaces():
     assert (crease_regions(V, F, np.arange(len(F)), vertex_tolerance(V, F), TT) == 0).all()
 
 
-# two thread ridges of a clean generated bolt (held-out bolt_s18012_frontal_n0: flank, crest,
-# flank, valley, flank, crest, flank), one row each; the creases turn by 37 degrees (flank to
-# crest) and 74 (the valley)
-TWO_RIDGES = [(9.95, 0.0), (10.68, 0.97), (10.68, 1.45), (9.95, 2.42), (10.68, 3.39),
-              (10.68, 3.87), (9.95, 4.84)]
+TWO_RIDGES = thread_profile(2)
 
 # a shaft (r = 10), a fillet of radius 1 in three facets, and a flange face (z = 1)
 FILLET = ([(10.0, z) for z in np.linspace(-3.0, 0.0, 4)]

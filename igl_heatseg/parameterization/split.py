@@ -58,6 +58,7 @@ __all__ = [
     "PACK_MIN_BOX_FILL",
     "PACK_MIN_AREA_FRACTION",
     "PACK_MAX_LENGTH",
+    "PACK_HALVE_MIN_FACES",
     "PACK_LONG_GAIN",
 ]
 
@@ -428,6 +429,11 @@ PACK_PIECE_ASPECT: float = 2.0
 #: A chart filling less than this of its minimum-area rectangle is halved for packing.
 PACK_MIN_BOX_FILL: float = 0.45
 
+#: ... and in the pipeline's last trial, a C-shaped chart of any size (a thin ring cut open:
+#: a thread flank's cone, 48 faces on a coarse bolt) down to this many faces, when the atlas
+#: then fills more (``igl_heatseg.pipeline.stages``).
+PACK_HALVE_MIN_FACES: int = 4
+
 #: Only charts at least this fraction of the mesh's area are cut for their aspect ratio or
 #: their box fill (small strips pack well among the other charts) ...
 PACK_MIN_AREA_FRACTION: float = 0.1
@@ -480,6 +486,7 @@ def split_for_packing(
     *,
     max_length: float = np.inf,
     big: bool = True,
+    min_faces: int = 2 * SPLIT_MIN_FACES,
 ) -> list | None:
     """Cut a chart that packs badly into pieces that pack well, by straight cuts in the map.
 
@@ -506,6 +513,8 @@ def split_for_packing(
         Length (units of ``UV``) above which a chart of any size is cut across.
     big : bool
         Whether the aspect-ratio and box-fill rules apply (a chart large enough to matter).
+    min_faces : int
+        Fewest faces of a chart halved for its box fill.
 
     Returns
     -------
@@ -541,10 +550,10 @@ def split_for_packing(
         out = []
         for p in pieces:  # a slice of a ring cut open may still fill its rectangle badly
             sub = split_for_packing(UV, F[p], max_aspect, depth - 1, max_length=max_length,
-                                    big=big)
+                                    big=big, min_faces=min_faces)
             out += [p] if sub is None else [p[q] for q in sub]
         return out
-    if not big or fill >= PACK_MIN_BOX_FILL or depth <= 0 or len(F) < 2 * SPLIT_MIN_FACES:
+    if not big or fill >= PACK_MIN_BOX_FILL or depth <= 0 or len(F) < min_faces:
         return None
     halves = _slices(F, Q, lo, ext, 2)
     if halves is None or len(halves) < 2:
@@ -555,7 +564,8 @@ def split_for_packing(
     out = []
     for h, f in zip(halves, fills, strict=True):
         sub = (
-            split_for_packing(UV, F[h], max_aspect, depth - 1, max_length=max_length, big=big)
+            split_for_packing(UV, F[h], max_aspect, depth - 1, max_length=max_length, big=big,
+                              min_faces=min_faces)
             if f < PACK_MIN_BOX_FILL
             else None
         )
@@ -593,6 +603,8 @@ def cut_for_packing(
     max_length: float = np.inf,
     big: bool = True,
     sd_max: float = SPLIT_SD_MAX,
+    max_aspect: float = PACK_MAX_ASPECT,
+    min_faces: int = 2 * SPLIT_MIN_FACES,
 ) -> list:
     """Cut a long chart for packing, keeping its map (restricted to every piece).
 
@@ -604,7 +616,7 @@ def cut_for_packing(
         Its (bijective) map, ``param.UV`` indexing ``res.V``.
     name : str
         Chart name for messages.
-    max_length, big
+    max_length, big, max_aspect, min_faces
         As for :func:`split_for_packing`, ``max_length`` in the units of ``res.V`` (the map is
         measured at its true scale: UV area = 3D area).
     sd_max : float
@@ -632,7 +644,8 @@ def cut_for_packing(
     (5, True)
     """
     out = _split_keeping_map(res, param, name, PACKING_METHODS[0], lambda scale: (
-        split_for_packing(param.UV, res.F, max_length=max_length / scale, big=big)))
+        split_for_packing(param.UV, res.F, max_aspect, max_length=max_length / scale, big=big,
+                          min_faces=min_faces)))
     return _within_bound(out, res, param, sd_max, name, PACKING_METHODS[0])
 
 

@@ -32,6 +32,7 @@ from ..parameterization.cut import (
 )
 from ..parameterization.split import (
     MESH_SD_MAX,
+    PACK_HALVE_MIN_FACES,
     PACK_LONG_GAIN,
     PACK_MAX_LENGTH,
     PACK_MIN_AREA_FRACTION,
@@ -534,7 +535,11 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float
 
     1. charts longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's area, cut
        across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`);
-    2. then the spikes peeled off every chart whose pieces cost less room than it
+    2. then C-shaped charts of any size (filling less than ``PACK_MIN_BOX_FILL`` of their
+       rectangle, down to ``PACK_HALVE_MIN_FACES`` faces) halved while that helps them: the
+       thin rings of a bolt's thread flanks, cut open, nest in nothing (a coarse clean bolt's
+       37 charts filled 0.466 of the square);
+    3. then the spikes peeled off every chart whose pieces cost less room than it
        (:func:`~igl_heatseg.parameterization.split.peel_for_packing`; the gutter is
        estimated for a square filled to :data:`PEEL_FILL_GUESS`);
 
@@ -545,6 +550,9 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float
     bound = PACK_MAX_LENGTH * float(np.sqrt(areas.sum()))
     fill = _trial_cut(done, areas, gutter, "long charts cut", lambda c, name: cut_for_packing(
         c.cut, c.param, name, max_length=bound, big=False, sd_max=sd_max))
+    fill = _trial_cut(done, areas, gutter, "C-shaped charts halved", lambda c, name: (
+        cut_for_packing(c.cut, c.param, name, big=True, sd_max=sd_max, max_aspect=np.inf,
+                        min_faces=PACK_HALVE_MIN_FACES)), fill)
     total = sum(c.area for d in done for c in d[1] if c.param is not None)
     gap = gutter * float(np.sqrt(total / PEEL_FILL_GUESS))
     _trial_cut(done, areas, gutter, "spikes peeled", lambda c, name: peel_for_packing(

@@ -129,8 +129,8 @@ def run_pipeline(
         charts of their own (``split_from``), counted in ``charts_cut_for_distortion``.  Long
         or C-shaped charts (:func:`igl_heatseg.parameterization.split.cut_for_packing`: big
         ones always, any chart longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's
-        area when the atlas then packs tighter) are cut across, keeping their maps, and
-        counted in ``charts_cut_for_packing``.
+        area, and C-shaped ones of any size, when the atlas then packs tighter) are cut
+        across, keeping their maps, and counted in ``charts_cut_for_packing``.
 
     Returns
     -------

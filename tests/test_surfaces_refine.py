@@ -6,6 +6,7 @@ import json
 
 import igl
 import numpy as np
+import pytest
 
 from igl_heatseg.surfaces import refine_segmentation, segment_adjacency
 from igl_heatseg.surfaces.split import real_split
@@ -345,3 +346,26 @@ def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     assert np.array_equal(refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
     out = refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
     assert (out == 0).all()
+
+
+@pytest.mark.parametrize("width", [8.0, 14.0])
+def test_a_narrow_noisy_face_dealt_out_between_its_neighbours_gets_its_own_segment(width):
+    """A 45-degree chamfer three triangles wide between two planes, noise 0.1 x the edge
+    length, its faces dealt out between the planes (as the heat fields do to a narrow face:
+    a housing's rim in f19 housing_s19002_frontal_n0.1): the faces far off each plane
+    (``STRAY_TOL_NOISY``) are grown again into the chamfer's plane; left alone, both segments
+    stayed freeform. (Two triangles wide, dealt out down its middle, the faces off the
+    planes form regions under ``REGROW_MIN_FACES_NOISY``: it stays dealt out.)"""
+    from meshes import extruded
+
+    V, F, seg, sc = extruded([(-6, 0), (0, 0), (1.0, 1.0), (7, 1.0)], 0.5, width=width,
+                             noise=0.05, seed=1)
+    chamfer = seg == 1
+    labels = (sc > sc[chamfer].mean()).astype(np.int64)  # dealt out along its middle
+    r = refine_segmentation(V, F, labels)
+    L = np.asarray(r.labels)
+    own = np.bincount(L[chamfer]).argmax()
+    assert r.surfaces[own].kind == "plane"
+    assert (L[chamfer] == own).mean() >= 0.9 and (chamfer[L == own]).mean() >= 0.9
+    n = r.surfaces[own].params["normal"]
+    assert abs(abs(n @ np.array([-1.0, 0, 1]) / np.sqrt(2)) - 1) < 0.01

@@ -116,6 +116,19 @@ CORE_EXPLAINS = 0.85
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
 
+#: On a noisy mesh, a face is off its segment's surface for :func:`_regrow_strays` when its
+#: corners' RMS distance is above this x tol. tol is 2.5 noise levels, so this is 5 of them,
+#: which Gaussian noise alone reaches about once in 1e15 faces (chi-square, 3 corners). On the
+#: housing rim of :func:`_regrow_strays`, 3 x tol took 23 of its 208 faces (the rim is
+#: tilted: its faces next to a plane lie close to it), 2 x tol 158.
+STRAY_TOL_NOISY = 2.0
+
+#: ... and a region grown again from them becomes a segment with at least this many faces:
+#: where noisy faces meet at a junction, regions of 3-31 faces off every neighbour's surface
+#: became segments (f18 knob_s18003_frontal_n0.2: 32 -> 44 segments without this bar, 32 with
+#: it; f20 sprocket_s20001_frontal_n0.05: 110 -> 134, with it 112).
+REGROW_MIN_FACES_NOISY = 20
+
 #: ... and on a noisy mesh a segment of fewer than MIN_REGION_FACES faces and under this share
 #: of the mesh's area joins a neighbour that then still fits one surface. Set from face counts,
 #: not scores: a dense mesh's triangle is 3e-5 - 2e-4 of its area (5k - 30k faces), where one
@@ -438,21 +451,28 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
     return labels
 
 
-def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int) -> int:
-    """On an exact tessellation: the faces off their segment's surface (corner RMS above
-    GROW_TOL x tol) and the faces of segments under SHARD_FACES faces, gathered, are grown into
-    regions again (:func:`grow_regions`); a region that one surface explains, of at least
-    MIN_REGION_FACES faces, becomes a segment. The heat fields give each triangle of a chamfer
-    one triangle wide (no vertex inside it) the label of two of its corners, so the band
-    alternates between its two neighbours, and no segment holds two of its faces side by side.
-    Returns the segments made."""
+def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
+                   exact: bool = True) -> int:
+    """The faces off their segment's surface (corner RMS above GROW_TOL x tol; on a noisy mesh
+    STRAY_TOL_NOISY x tol) and, on an exact tessellation, the faces of segments under
+    SHARD_FACES faces, gathered, are grown into regions again (:func:`grow_regions`); a region
+    that one surface explains, of at least MIN_REGION_FACES faces (on a noisy mesh:
+    REGROW_MIN_FACES_NOISY, and evidence, :func:`~.split.evidence`), across two segments or
+    more, becomes a segment. The heat fields give each triangle of a chamfer one triangle wide
+    (no vertex inside it) the label of two of its corners, so the band alternates between its
+    two neighbours, and no segment holds two of its faces side by side; on noise the same
+    happens to a narrow face a few triangles wide (the rim of f19 housing_s19002_frontal_n0.1,
+    dealt out between 7 planes, its vertices up to 3.4 off them at a tolerance of 0.64: the
+    CAD build faceted all of them). Returns the segments made."""
     counts = np.bincount(labels)
     stray = np.zeros(len(F), dtype=bool)
-    stray[counts[labels] < SHARD_FACES] = True
+    if exact:
+        stray[counts[labels] < SHARD_FACES] = True
+    bar = (GROW_TOL if exact else STRAY_TOL_NOISY) * tol
     for k, s in fits.items():
         if s.is_analytic and counts[k] >= SHARD_FACES:
             faces = np.flatnonzero(labels == k)
-            stray[faces[corner_rms(V, F, faces, s) > GROW_TOL * tol]] = True
+            stray[faces[corner_rms(V, F, faces, s) > bar]] = True
     cand = np.flatnonzero(stray)
     if len(cand) < MIN_REGION_FACES:
         return 0
@@ -463,7 +483,8 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int) ->
         if len(part) < MIN_REGION_FACES or len(np.unique(labels[part])) < 2:
             continue  # (a region within one segment: the segment's own business)
         u = fit_faces(V, F, part, tol, W=W, FN=FN)
-        if not explains(u, tol):
+        if not explains(u, tol) or not (exact or (evidence(F, part, u)
+                                                   and len(part) >= REGROW_MIN_FACES_NOISY)):
             continue
         touched.update(np.unique(labels[part]).tolist())
         labels[part] = nxt
@@ -657,8 +678,8 @@ def refine_segmentation(
                     fits[lab] = fr
                 continue
         fits[k] = s
-    if split and exact:
-        n_split += _regrow_strays(V, F, labels, fits, tol, TT, W, FN, nxt)
+    if split:
+        n_split += _regrow_strays(V, F, labels, fits, tol, TT, W, FN, nxt, exact)
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)  # old segments may split
     timings["fit_split"] = time.perf_counter() - t
 

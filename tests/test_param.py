@@ -613,7 +613,8 @@ def test_a_strip_with_holes_is_sliced_through_its_holes(data_dir):
     assert chart_topology(F).is_disk
     length = np.ptp(UV, axis=0).max()
     for n in (2, 3, 4):
-        pieces = split_for_packing(UV, F, big=False, max_length=1.01 * length / n)
+        assert split_for_packing(UV, F, big=False, max_length=1.01 * length / n) is None
+        pieces = split_for_packing(UV, F, big=False, max_length=1.01 * length / n, shift=True)
         assert pieces is not None and len(pieces) >= n
         assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
         assert all(chart_topology(F[p]).is_disk for p in pieces)

@@ -455,6 +455,7 @@ def cut_for_packing(
     sd_max: float = SPLIT_SD_MAX,
     max_aspect: float = PACK_MAX_ASPECT,
     min_faces: int = PACK_MIN_HALVE_FACES,
+    shift: bool = False,
 ) -> list:
     """Cut a long chart for packing, keeping its map (restricted to every piece).
 
@@ -466,7 +467,7 @@ def cut_for_packing(
         Its (bijective) map, ``param.UV`` indexing ``res.V``.
     name : str
         Chart name for messages.
-    max_length, big, max_aspect, min_faces
+    max_length, big, max_aspect, min_faces, shift
         As for :func:`split_for_packing`, ``max_length`` in the units of ``res.V`` (the map is
         measured at its true scale: UV area = 3D area).
     sd_max : float
@@ -495,7 +496,7 @@ def cut_for_packing(
     """
     out = _split_keeping_map(res, param, name, PACKING_METHODS[0], lambda scale: (
         split_for_packing(param.UV, res.F, max_aspect, max_length=max_length / scale, big=big,
-                          min_faces=min_faces)))
+                          min_faces=min_faces, shift=shift)))
     return _within_bound(out, res, param, sd_max, name, PACKING_METHODS[0])
 
 

@@ -354,8 +354,8 @@ def crease_regions(V, F, faces, tol, TT, W=None, FN=None) -> np.ndarray:
     gap = u[:-1] - u[1:]
     ok = u[:-1] >= np.maximum(CREASE_GAP_RATIO * u[1:], CREASE_MIN_ANGLE)
     # the widest gap first; when its pieces are not all surfaces, the next widest (two thread
-    # ridges meet at a valley of 64 degrees, their flanks and crests at 32: the valleys alone
-    # leave two ridges, which only the three rows of the ridge fit)
+    # ridges meet at a valley of 72-74 degrees, their flanks and crests at 36-37: the valleys
+    # alone leave ridges, each cut by its rows then, row_regions)
     for i in sorted(np.flatnonzero(ok).tolist(), key=lambda i: -gap[i])[:CREASE_TRIES]:
         region = _cut_at(V, F, faces, tol, TT, W, FN, a, b, ang > 0.5 * (u[i] + u[i + 1]))
         if region is not None:

@@ -25,7 +25,7 @@ __all__ = [
 ]
 
 #: A chart whose map's minimum-area rectangle is longer than this times its width, and whose
-#: area is at least :data:`PACK_MIN_AREA_FRACTION` of the mesh's, is cut across its length for
+#: area is at least ``split.PACK_MIN_AREA_FRACTION`` of the mesh's, is cut across its length for
 #: packing (a long strip alone caps the fill of a square atlas at 1 / aspect).
 PACK_MAX_ASPECT: float = 4.0
 
@@ -35,7 +35,7 @@ PACK_PIECE_ASPECT: float = 2.0
 #: A chart filling less than this of its minimum-area rectangle is halved for packing.
 PACK_MIN_BOX_FILL: float = 0.45
 
-#: ... when it has this many faces (by default; a chart of one row of facets can have few) ...
+#: ... when it has at least this many faces (by default; a chart of one row of facets has few) ...
 PACK_MIN_HALVE_FACES: int = 40
 
 #: ... and in the pipeline's trial of C-shaped charts, of any size (a thin ring cut open: a
@@ -60,16 +60,16 @@ def _box(UV: np.ndarray, F: np.ndarray):
     return Q, lo, ext, area / max(float(ext[0] * ext[1]), 1e-300)
 
 
-def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int, shift: bool = True) -> list | None:
+def _slices(F: np.ndarray, Q: np.ndarray, lo, ext, n: int, shift: bool = False) -> list | None:
     """``n`` slices across the long axis (faces by centroid, strays merged), or ``None`` when
     one is not a disk.
 
     Equal slices first. When one is not a disk (a strip with holes: the side of a knob with a
     ring of dimples, cut open, holds a whole dimple in every slice) and ``shift``, each cut in
-    turn moves by
-    up to half a slice (in :data:`SLICE_SHIFTS` steps, nearest first) to where the slice it
-    closes is made of disks: through a hole. Such a slice may fall into pieces (the seam that
-    joined the holes cuts it lengthwise): each piece is then a slice of its own."""
+    turn moves by up to half a slice (in :data:`SLICE_SHIFTS` steps, nearest first) to where
+    the slice it closes is made of disks: through a hole. Such a slice may fall into pieces
+    (the seam that joined the holes cuts it lengthwise): each piece is then a slice of its
+    own."""
     axis = int(np.argmax(ext))
     c = Q[F].mean(axis=1)[:, axis]
     t = (c - lo[axis]) / ext[axis] * n  # slice coordinate: slice i holds [i, i + 1)

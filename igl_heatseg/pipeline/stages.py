@@ -534,11 +534,11 @@ def _cut_for_packing(done: list, areas: np.ndarray, sd_max: float, gutter: float
     at least ``PACK_LONG_GAIN`` more of its square (both layouts are packed):
 
     1. charts longer than ``PACK_MAX_LENGTH`` x the square root of the mesh's area, cut
-       across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`); then, a trial of
-       its own, those whose equal slices are not disks, cut through their holes (``shift``:
-       a dimpled knob's side; in the first trial they made it fail as a whole, and the later
-       trials start from the layout kept: held-out f21 saddle_boss_s21020, paper, 0.710 ->
-       0.627);
+       across (:func:`~igl_heatseg.parameterization.split.cut_for_packing`); then, in a trial
+       of its own, those whose equal slices are not disks, cut through their holes (``shift``:
+       a dimpled knob's side). Moved into the first trial, such cuts made it fail as a whole
+       on fresh f21 saddle_boss_s21020 (paper), and since the later trials start from the
+       layout kept, its atlas ended at 0.627 instead of 0.710;
     2. then C-shaped charts of any size (filling less than ``PACK_MIN_BOX_FILL`` of their
        rectangle, down to ``PACK_HALVE_MIN_FACES`` faces) halved while that helps them: the
        thin rings of a bolt's thread flanks, cut open, nest in nothing (a coarse clean bolt's

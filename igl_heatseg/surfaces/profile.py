@@ -18,6 +18,7 @@ crease twice as sharp as its inner ones. :func:`torus_evidence` refuses a torus 
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 
 from .model import Surface
@@ -159,48 +160,31 @@ def torus_evidence(V, F, faces, s: Surface, FN) -> bool:
         return True
     if rows <= 2:
         return False
-    n = len(V)
-    row_of = np.full(n, -1, dtype=np.int64)
+    row_of = np.full(len(V), -1, dtype=np.int64)
     row_of[verts] = row
-    Fs = F[faces]
-    E = np.r_[Fs[:, [0, 1]], Fs[:, [1, 2]], Fs[:, [2, 0]]]
-    owner = np.tile(faces, 3)
-    same = row_of[E[:, 0]] == row_of[E[:, 1]]  # an edge along a row
-    E, owner = np.sort(E[same], axis=1), owner[same]
-    key = E[:, 0] * n + E[:, 1]
-    uniq, first, count = np.unique(key, return_index=True, return_counts=True)
+    # the set and the faces touching it, with their adjacency (TT[i, j]: the face across the
+    # edge from corner j to corner j + 1)
+    sub = np.flatnonzero(np.isin(F, verts).any(axis=1))
+    Fs = F[sub]
+    TT = igl.triangle_triangle_adjacency(np.ascontiguousarray(Fs))[0]
+    inside = np.isin(sub, faces)
+    r0, r1 = row_of[Fs], row_of[np.roll(Fs, -1, axis=1)]
+    along = inside[:, None] & (r0 == r1) & (r0 >= 0) & (TT >= 0)  # edges along a row
+    i, j = np.nonzero(along)
+    g = TT[i, j]
 
-    def turn(f, g):
-        return np.arccos(np.clip(np.einsum("ij,ij->i", FN[f], FN[g]), -1.0, 1.0))
+    def turn(f, h):
+        return np.arccos(np.clip(np.einsum("ij,ij->i", FN[sub[f]], FN[sub[h]]), -1.0, 1.0))
 
-    # inner rows: the edges two of the faces share
-    two = np.isin(key, uniq[count == 2])
-    order = np.argsort(key[two], kind="stable")
-    pair = owner[two][order].reshape(-1, 2)
-    inner = turn(pair[:, 0], pair[:, 1]) if len(pair) else np.zeros(0)
-    if not len(inner):
+    inner_edge = inside[g] & (g > i)  # inner rows: each edge shared by two of the faces once
+    inner = turn(i[inner_edge], g[inner_edge])
+    end = ~inside[g]  # end rows: the face across is outside the set (none at the mesh border)
+    if not len(inner) or not end.any():  # no end row to judge: border off the rows, or none
         return True
-    # end rows: the edges of one of the faces, and the face across them outside the set
-    one = first[count == 1]
-    if not len(one):  # the set's border does not follow its rows
-        return True
-    bkey, bface, brow = key[one], owner[one], row_of[E[one, 0]]
-    inside = np.zeros(len(F), dtype=bool)
-    inside[faces] = True
-    near = np.flatnonzero(~inside & np.isin(F, E[one]).any(axis=1))
-    G = F[near]
-    GE = np.sort(np.r_[G[:, [0, 1]], G[:, [1, 2]], G[:, [2, 0]]], axis=1)
-    gkey, gface = GE[:, 0] * n + GE[:, 1], np.tile(near, 3)
-    hit = np.isin(gkey, bkey)
-    across = dict(zip(gkey[hit].tolist(), gface[hit].tolist(), strict=True))
-    got = np.array([k in across for k in bkey.tolist()], dtype=bool)
-    if not got.any():  # no neighbours across the end rows (the border of the mesh)
-        return True
-    out = np.array([across[k] for k in bkey[got].tolist()], dtype=np.int64)
-    ends = turn(bface[got], out)
+    ends, brow = turn(i[end], g[end]), r0[i[end], j[end]]
     bar = TANGENT_RATIO * float(np.median(inner))
     for r in (0, rows - 1):
-        at = brow[got] == r
+        at = brow == r
         if at.any() and float(np.median(ends[at])) > bar:
             return False
     return True

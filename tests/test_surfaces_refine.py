@@ -369,3 +369,30 @@ def test_a_narrow_noisy_face_dealt_out_between_its_neighbours_gets_its_own_segme
     assert (L[chamfer] == own).mean() >= 0.9 and (chamfer[L == own]).mean() >= 0.9
     n = r.surfaces[own].params["normal"]
     assert abs(abs(n @ np.array([-1.0, 0, 1]) / np.sqrt(2)) - 1) < 0.01
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("width", [8.0, 14.0])
+def test_a_narrow_noisy_fillet_dealt_out_down_its_middle_gets_its_own_segment(width, seed):
+    """A quarter fillet of radius 0.65 two facets wide between two planes at 90 degrees, noise
+    0.1 x the edge length, dealt out down its middle between the planes (as the heat fields do
+    to a narrow fillet: f21 housing_s21002_frontal_n0.1). No face is far enough off its plane
+    to be a stray, yet one cylinder explains the seam far better than the two planes
+    (:func:`~igl_heatseg.surfaces.seams.seam_blends`); without it the fillet stayed dealt out,
+    a tenth of each plane's segment. A sharp corner with the same noise keeps its two planes."""
+    from meshes import extruded
+
+    r = 0.65
+    arc = [(r * np.sin(t), r * (1 - np.cos(t))) for t in (0.0, np.pi / 4, np.pi / 2)]
+    V, F, seg, sc = extruded([(-6, 0), *arc, (r, 7)], 0.5, width=width, noise=0.05, seed=seed)
+    fillet = (seg == 1) | (seg == 2)
+    labels = (sc > sc[fillet].mean()).astype(np.int64)
+    res = refine_segmentation(V, F, labels)
+    L = np.asarray(res.labels)
+    own = np.bincount(L[fillet]).argmax()
+    assert len(res.surfaces) == 3 and res.surfaces[own].kind == "cylinder"
+    assert (L[fillet] == own).mean() >= 0.95 and fillet[L == own].mean() >= 0.95
+    assert abs(res.surfaces[own].params["radius"] - r) < 0.15 * r  # three noisy vertex rows
+    V, F, seg, sc = extruded([(-6, 0), (0, 0), (0, 7)], 0.5, width=width, noise=0.05, seed=seed)
+    res = refine_segmentation(V, F, (seg == 1).astype(np.int64))
+    assert [s.kind for s in res.surfaces] == ["plane", "plane"]

@@ -10,7 +10,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    cylinder looks planar; the refit on the grown region finds the cylinder). On an exact
    tessellation, the faces off their segment's surface and the faces of tiny segments are then
    gathered and grown again (:func:`_regrow_strays`): a chamfer one triangle wide, which the
-   heat fields deal out between its two neighbours, becomes one cone. On a noisy mesh a segment
+   heat fields deal out between its two neighbours, becomes one cone. On a noisy mesh, so do
+   the seams of two segments that one surface explains far better than the two (a fillet two
+   triangles wide dealt out down its middle: :mod:`~igl_heatseg.surfaces.seams`); and a segment
    whose surface explains it but fits worse than a merge accepts of a union
    (:data:`OVERFIT_RATIO`) is split too, at that tighter tolerance: two faces joined smoothly.
 3. **Merge** adjacent segments that one surface explains within tolerance, cheapest union first
@@ -49,6 +51,7 @@ from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
 from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
+from .seams import seam_blends
 from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
@@ -680,6 +683,8 @@ def refine_segmentation(
         fits[k] = s
     if split:
         n_split += _regrow_strays(V, F, labels, fits, tol, TT, W, FN, nxt, exact)
+        if not exact:  # a narrow fillet dealt out down its middle (noise hides it otherwise)
+            n_split += seam_blends(V, F, labels, fits, tol, TT, W, FN)
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)  # old segments may split
     timings["fit_split"] = time.perf_counter() - t
 

@@ -119,11 +119,15 @@ CORE_EXPLAINS = 0.85
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
 
-#: On a noisy mesh, a face is off its segment's surface for :func:`_regrow_strays` when its
-#: corners' RMS distance is above this x tol. tol is 2.5 noise levels, so this is 5 of them,
-#: which Gaussian noise alone reaches about once in 1e15 faces (chi-square, 3 corners). On the
-#: housing rim of :func:`_regrow_strays`, 3 x tol took 23 of its 208 faces (the rim is
-#: tilted: its faces next to a plane lie close to it), 2 x tol 158.
+#: On a noisy mesh, a face is off its segment's surface for :func:`_regrow_strays` when one of
+#: its corners is farther than this x tol. tol is 2.5 noise levels, so this is 5 of them, which
+#: Gaussian noise alone passes at about one vertex in 2 million. On the housing rim of
+#: :func:`_regrow_strays` the corners' RMS at 3 x tol took 23 of its 208 faces (the rim is
+#: tilted: its faces next to a plane lie close to it), at 2 x tol 158. The farthest corner
+#: (not the RMS) also takes the row of a narrow face whose faces have one corner on it and two
+#: on the neighbour: without it the rim of f21 housing_s21002_frontal_n0.1 (146 faces, dealt
+#: out between 6 planes) was gathered in pieces under REGROW_MIN_FACES_NOISY, and the CAD
+#: build faceted all 6 planes.
 STRAY_TOL_NOISY = 2.0
 
 #: ... and a region grown again from them becomes a segment with at least this many faces:
@@ -456,17 +460,17 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
 
 def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
                    exact: bool = True) -> int:
-    """The faces off their segment's surface (corner RMS above GROW_TOL x tol; on a noisy mesh
-    STRAY_TOL_NOISY x tol) and, on an exact tessellation, the faces of segments under
-    SHARD_FACES faces, gathered, are grown into regions again (:func:`grow_regions`); a region
+    """The faces off their segment's surface (corner RMS above GROW_TOL x tol; on a noisy mesh a
+    corner farther than STRAY_TOL_NOISY x tol) and, on an exact tessellation, the faces of segments
+    under SHARD_FACES faces, gathered, are grown into regions again (:func:`grow_regions`); a region
     that one surface explains, of at least MIN_REGION_FACES faces (on a noisy mesh:
-    REGROW_MIN_FACES_NOISY, and evidence, :func:`~.split.evidence`), across two segments or
-    more, becomes a segment. The heat fields give each triangle of a chamfer one triangle wide
-    (no vertex inside it) the label of two of its corners, so the band alternates between its
-    two neighbours, and no segment holds two of its faces side by side; on noise the same
-    happens to a narrow face a few triangles wide (the rim of f19 housing_s19002_frontal_n0.1,
-    dealt out between 7 planes, its vertices up to 3.4 off them at a tolerance of 0.64: the
-    CAD build faceted all of them). Returns the segments made."""
+    REGROW_MIN_FACES_NOISY, and evidence, :func:`~.split.evidence`), across two segments or more,
+    becomes a segment. The heat fields give each triangle of a chamfer one triangle wide (no vertex
+    inside it) the label of two of its corners, so the band alternates between its two neighbours,
+    and no segment holds two of its faces side by side; on noise the same happens to a narrow face a
+    few triangles wide (the rim of f19 housing_s19002_frontal_n0.1, dealt out between 7 planes, its
+    vertices up to 3.4 off them at a tolerance of 0.64: the CAD build faceted all of them). Returns
+    the segments made."""
     counts = np.bincount(labels)
     stray = np.zeros(len(F), dtype=bool)
     if exact:
@@ -475,7 +479,11 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
     for k, s in fits.items():
         if s.is_analytic and counts[k] >= SHARD_FACES:
             faces = np.flatnonzero(labels == k)
-            stray[faces[corner_rms(V, F, faces, s) > bar]] = True
+            if exact:
+                stray[faces[corner_rms(V, F, faces, s) > bar]] = True
+            else:  # a face with one corner off: the narrow face's row beside its neighbour
+                d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3)
+                stray[faces[d.max(axis=1) > bar]] = True
     cand = np.flatnonzero(stray)
     if len(cand) < MIN_REGION_FACES:
         return 0

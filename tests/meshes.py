@@ -182,3 +182,20 @@ def extruded(profile, h: float, width: float = 8.0, noise: float = 0.0, seed: in
     sc = np.repeat(s, ny)[F].mean(axis=1)
     V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
     return V, F, np.searchsorted(knots, sc) - 1, sc
+
+
+def blind_hole(n: int = 12, rings: int = 40, h: float = 0.5, r: float = 1.0,
+               noise: float = 0.0, seed: int = 0):
+    """The wall of a round hole (an ``n``-sided prism of radius ``r``, ``rings`` rows of height
+    ``h``, open at the top) closed at z = 0 by a fan of ``n`` triangles (faces ``0..n-1``)
+    around the centre (vertex 0); vertices moved by Gaussian noise of ``noise``: V, F."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.c_[r * np.cos(t), r * np.sin(t)]
+    V = np.vstack([[[0.0, 0, 0]]] + [np.c_[ring, np.full(n, h * z)] for z in range(rings + 1)])
+    i, j = np.arange(n), (np.arange(n) + 1) % n
+    F = [np.c_[np.zeros(n, dtype=np.int64), 1 + j, 1 + i]]
+    for q in range(rings):
+        a, b = 1 + n * q, 1 + n * (q + 1)
+        F += [np.c_[a + i, a + j, b + j], np.c_[a + i, b + j, b + i]]
+    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
+    return V, np.concatenate(F).astype(np.int64)

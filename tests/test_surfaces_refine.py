@@ -418,3 +418,24 @@ def test_a_noisy_rim_one_triangle_wide_dealt_out_between_two_walls_gets_its_own_
     assert [s.kind for s in res.surfaces] == ["plane"] * 3
     assert (L[rim] == own).mean() >= 0.9 and rim[L == own].mean() >= 0.9
     assert abs(res.surfaces[own].params["normal"][2]) > 0.99
+
+
+@pytest.mark.parametrize("n", [8, 12])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_noisy_blind_holes_bottom_labelled_with_its_wall_gets_its_own_plane(n, seed):
+    """A noisy blind hole (noise 0.1 x the edge length) labelled as one segment, the fan that
+    closes it included (as on f21 housing_s21002_frontal_n0.1, whose four 7-face hole bottoms
+    lay in their walls' segments, and the CAD build faceted the walls for them). The cylinder
+    explains the whole segment within tolerance, no neighbour can take the fan's faces, and it
+    stayed in the wall; standing across the cylinder, it becomes a plane of its own
+    (:func:`~igl_heatseg.surfaces.strays.cut_caps`)."""
+    from meshes import blind_hole
+
+    V, F = blind_hole(n=n, noise=0.05, seed=seed)
+    res = refine_segmentation(V, F, np.zeros(len(F), dtype=np.int64))
+    L = np.asarray(res.labels)
+    assert sorted(s.kind for s in res.surfaces) == ["cylinder", "plane"]
+    cap = L[0]
+    assert res.surfaces[cap].kind == "plane"
+    assert np.flatnonzero(L == cap).tolist() == list(range(n))
+    assert abs(res.surfaces[cap].params["normal"][2]) > 0.99

@@ -25,7 +25,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
-   neighbours that fit them, so a freeform neighbour's triangle stayed). On an exact
+   neighbours that fit them, so a freeform neighbour's triangle stayed); on a noisy mesh a
+   patch of such faces that no neighbour takes becomes a segment (a blind hole's bottom in
+   its wall's segment: :func:`~igl_heatseg.surfaces.strays.cut_caps`). On an exact
    tessellation, small pieces a segment holds only across creases leave it, unless they lie
    on its surface (a coarse small hole's facets)
    (:func:`~igl_heatseg.surfaces.strays.split_at_creases`).
@@ -74,7 +76,7 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import shed_strays, split_at_creases
+from .strays import cut_caps, shed_strays, split_at_creases
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -733,6 +735,8 @@ def refine_segmentation(
     t = time.perf_counter()
     labels = _absorb_shards(V, F, labels, fits, tol, TT, FN, W, exact)
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
+    if split and not exact:  # (an exact tessellation's caps leave at their creases, below)
+        n_split += cut_caps(V, F, labels, fits, tol, TT, FN, W)
     if exact:  # no segment of a CAD tessellation runs across a crease
         labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F), V, tol, W)
         if crease_moved:  # a piece sent to a neighbour's piece that left too is cut off

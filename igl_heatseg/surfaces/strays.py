@@ -5,7 +5,9 @@ the plane and the third an edge length off it, its normal square to the plane's.
 moves of :mod:`.refine` give a face only to an analytic neighbour that fits it, so a stray of
 a freeform neighbour (the flank) stays, and the side plane, 1,844 faces, then deviates from
 its segment by 1.2 % of the diagonal because of two such triangles (gear_s1019, a tuning
-part): the B-Rep stage faceted it.
+part): the B-Rep stage faceted it (:func:`shed_strays`). A patch of such faces that no
+neighbour can take (the fan closing a small blind hole, in its wall's segment) becomes a
+segment of its own (:func:`cut_caps`).
 """
 from __future__ import annotations
 
@@ -17,13 +19,20 @@ from ..mesh.topology import label_pieces
 from .segment_fit import corner_rms, explains, fit_faces, normal_angle
 from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays", "split_at_creases"]
+__all__ = ["shed_strays", "split_at_creases", "cut_caps"]
 
 #: A border face is a stray when its normal is more than this angle from its surface's ...
 STRAY_ANGLE = math.radians(60.0)
 
 #: ... and its corners' RMS distance to the surface is above this many tolerances.
 STRAY_TOL = 2.0
+
+#: cut_caps: a patch of faces standing across their segment's surface becomes a segment with at
+#: least this many faces (a fan closing a small blind hole: 7 on f21 housing_s21002) ...
+CAP_MIN_FACES = 4
+
+#: ... and at most this share of the segment's faces.
+CAP_MAX_SHARE = 0.25
 
 #: Passes (a stray behind a stray is on the border after the first one has gone).
 STRAY_PASSES = 3
@@ -220,3 +229,99 @@ def shed_strays(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, to
         moved += n
         labels[:] = new
     return moved
+
+
+def cut_caps(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: float,
+             TT: np.ndarray, FN: np.ndarray, W: np.ndarray | None = None) -> int:
+    """Give every patch of faces that stands across its analytic segment's surface, and that
+    one surface explains, a segment of its own (in place).
+
+    A face stands across when its normal is more than STRAY_ANGLE from its surface's and its
+    farthest corner is more than STRAY_TOL ``tol`` off it. :func:`shed_strays` moves such faces
+    to a neighbour; a patch with no neighbour to take it stays: the fan closing a small blind
+    hole, labelled with the hole's wall, a plane across the cylinder (f21
+    housing_s21002_frontal_n0.1: four such caps of 7 faces, and the CAD build faceted the four
+    walls for them). A patch (edge-connected) becomes a segment when it has CAP_MIN_FACES faces
+    or more, at most CAP_MAX_SHARE of its segment's, and an analytic fit within ``tol`` whose
+    normals agree with the faces', unless that empties its segment or cuts it apart.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment of every face; updated in place (new segments numbered after the largest).
+    fits : dict
+        Segment -> Surface; the new segments' fits are added, their old segments refitted.
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        ``igl.triangle_triangle_adjacency(F)[0]``.
+    FN : (m, 3) float64
+        Unit face normals.
+    W : (n, 3) float64, optional
+        Positions the normals come from.
+
+    Returns
+    -------
+    int
+        Segments made.
+
+    Examples
+    --------
+    A blind hole (a 12-sided prism, radius 1) whose bottom fan is labelled with its wall:
+
+    >>> import igl, numpy as np
+    >>> from igl_heatseg.mesh.geometry import face_normals
+    >>> from igl_heatseg.surfaces.segment_fit import fit_faces
+    >>> t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    >>> ring = np.c_[np.cos(t), np.sin(t)]
+    >>> V = np.vstack([[[0.0, 0, 0]]] + [np.c_[ring, np.full(12, z)] for z in (0, 1, 2, 3)])
+    >>> i, j = np.arange(12), (np.arange(12) + 1) % 12
+    >>> F = np.r_[np.c_[np.zeros(12, int), 1 + j, 1 + i]]             # the bottom fan
+    >>> for r in range(3):
+    ...     a, b = 1 + 12 * r, 13 + 12 * r
+    ...     F = np.r_[F, np.c_[a + i, a + j, b + j], np.c_[a + i, b + j, b + i]]
+    >>> labels = np.zeros(len(F), dtype=np.int64)
+    >>> fits = {0: fit_faces(V, F, np.arange(12, len(F)), 0.01)}     # the wall's cylinder
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> cut_caps(V, F, labels, fits, 0.01, TT, face_normals(V, F)), fits[1].kind
+    (1, 'plane')
+    >>> np.flatnonzero(labels == 1).tolist() == list(range(12))
+    True
+    """
+    made = 0
+    nxt = max(fits) + 1 if fits else int(labels.max()) + 1
+    for k in sorted(fits):
+        s = fits[k]
+        if not s.is_analytic:
+            continue
+        faces = np.flatnonzero(labels == k)
+        d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+        across = faces[(d > STRAY_TOL * tol) & (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)]
+        if len(across) < CAP_MIN_FACES:
+            continue
+        sub = np.full(len(F), -1, dtype=np.int64)
+        sub[across] = 0
+        pieces = label_pieces(F, sub, TT)
+        cut = False
+        for p in np.unique(pieces[across]).tolist():
+            patch = across[pieces[across] == p]
+            if not (CAP_MIN_FACES <= len(patch) <= CAP_MAX_SHARE * len(faces)):
+                continue
+            u = fit_faces(V, F, patch, tol, W=W, FN=FN)
+            if not explains(u, tol):
+                continue
+            rest = np.setdiff1d(np.flatnonzero(labels == k), patch)
+            keep = np.full(len(F), -1, dtype=np.int64)
+            keep[rest] = 0
+            if len(rest) == 0 or len(np.unique(label_pieces(F, keep, TT)[rest])) > 1:
+                continue  # never empty a segment nor cut it apart
+            labels[patch] = nxt
+            fits[nxt] = u
+            nxt += 1
+            made += 1
+            cut = True
+        if cut:
+            fits[k] = fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+    return made

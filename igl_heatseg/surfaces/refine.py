@@ -63,6 +63,7 @@ from .segment_fit import (
     fit_faces,
     normal_angle,
     normals_agree,
+    refit_segments,
 )
 from .split import (
     SPLIT_GOOD_SHARE,
@@ -504,12 +505,7 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
         fits[nxt] = u
         nxt += 1
         made += 1
-    for k in touched:  # what the regions left of the old segments, refitted once
-        rest = np.flatnonzero(labels == k)
-        if len(rest):
-            fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
-        else:
-            del fits[k]
+    refit_segments(V, F, labels, fits, touched, tol, W, FN)  # what the regions left, once
     return made
 
 

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .samples import segment_adjacency
-from .segment_fit import explains, fit_faces
+from .segment_fit import explains, fit_faces, refit_segments
 from .split import evidence
 
 __all__ = ["seam_blends", "SEAM_BEAT", "SEAM_OWN", "SEAM_MIN_FACES", "SEAM_MAX_SHARE"]
@@ -152,10 +152,5 @@ def seam_blends(V, F, labels, fits: dict, tol: float, TT, W=None, FN=None,
         fits[nxt] = u
         nxt += 1
         made += 1
-    for k in touched:
-        rest = np.flatnonzero(labels == k)
-        if len(rest):
-            fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
-        else:
-            del fits[k]
+    refit_segments(V, F, labels, fits, touched, tol, W, FN)
     return made

@@ -23,6 +23,7 @@ from .tolerance import vertex_tolerance
 __all__ = [
     "fit_faces",
     "fit_segments",
+    "refit_segments",
     "normals_agree",
     "precheck_vertices",
     "rms_to",
@@ -326,6 +327,28 @@ def rms_to(V, F, faces, s: Surface, verts=None) -> float:
         verts = precheck_vertices(F, faces)
     d = s.distance(V[verts])
     return float(np.sqrt((d * d).mean()))
+
+
+def refit_segments(V, F, labels, fits: dict, ks, tol: float, W=None, FN=None) -> None:
+    """Refit, in place, the segments ``ks`` after faces left them: ``fits[k]`` becomes the fit
+    of what segment ``k`` still holds (:func:`fit_faces`), or is removed when it holds nothing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])
+    >>> fits = {0: None, 1: None}
+    >>> refit_segments(V, F, np.array([0, 0]), fits, [0, 1], 0.01)
+    >>> fits[0].kind, 1 in fits
+    ('plane', False)
+    """
+    for k in ks:
+        rest = np.flatnonzero(labels == k)
+        if len(rest):
+            fits[k] = fit_faces(V, F, rest, tol, W=W, FN=FN)
+        else:
+            del fits[k]
 
 
 def explains(s: Surface, tol: float) -> bool:

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..mesh.topology import label_pieces
-from .segment_fit import corner_rms, explains, fit_faces, normal_angle
+from .segment_fit import corner_rms, explains, fit_faces, normal_angle, refit_segments
 from .tolerance import CREASE_ANGLE
 
 __all__ = ["shed_strays", "split_at_creases", "cut_caps"]
@@ -323,5 +323,5 @@ def cut_caps(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: 
             made += 1
             cut = True
         if cut:
-            fits[k] = fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
+            refit_segments(V, F, labels, fits, [k], tol, W, FN)
     return made

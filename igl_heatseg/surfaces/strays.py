@@ -135,10 +135,14 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
     return out, moved
 
 
-def _stands_across(V, F, FN, faces, s, tol) -> np.ndarray:
-    """Which of ``faces`` stand across the analytic surface ``s`` (far and turned away)."""
-    return (corner_rms(V, F, faces, s) > STRAY_TOL * tol) & \
-        (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)
+def _stands_across(V, F, FN, faces, s, tol, farthest: bool = False) -> np.ndarray:
+    """Which of ``faces`` stand across the analytic surface ``s`` (far and turned away); far
+    by the corners' RMS distance, or with ``farthest`` by the farthest corner's."""
+    if farthest:
+        far = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
+    else:
+        far = corner_rms(V, F, faces, s)
+    return (far > STRAY_TOL * tol) & (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)
 
 
 def _takes(V, F, FN, f, s, tol) -> bool:
@@ -297,8 +301,7 @@ def cut_caps(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: 
         if not s.is_analytic:
             continue
         faces = np.flatnonzero(labels == k)
-        d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-        across = faces[(d > STRAY_TOL * tol) & (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)]
+        across = faces[_stands_across(V, F, FN, faces, s, tol, farthest=True)]
         if len(across) < CAP_MIN_FACES:
             continue
         sub = np.full(len(F), -1, dtype=np.int64)

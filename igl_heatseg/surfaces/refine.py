@@ -58,6 +58,7 @@ from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
     MIN_REGION_FACES,
+    corner_max_dev,
     corner_rms,
     explains,
     fit_faces,
@@ -485,8 +486,7 @@ def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
             if exact:
                 stray[faces[corner_rms(V, F, faces, s) > bar]] = True
             else:  # a face with one corner off: the narrow face's row beside its neighbour
-                d = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3)
-                stray[faces[d.max(axis=1) > bar]] = True
+                stray[faces[corner_max_dev(V, F, faces, s) > bar]] = True
     cand = np.flatnonzero(stray)
     if len(cand) < MIN_REGION_FACES:
         return 0

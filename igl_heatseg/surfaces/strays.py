@@ -16,7 +16,14 @@ import math
 import numpy as np
 
 from ..mesh.topology import label_pieces
-from .segment_fit import corner_rms, explains, fit_faces, normal_angle, refit_segments
+from .segment_fit import (
+    corner_max_dev,
+    corner_rms,
+    explains,
+    fit_faces,
+    normal_angle,
+    refit_segments,
+)
 from .tolerance import CREASE_ANGLE
 
 __all__ = ["shed_strays", "split_at_creases", "cut_caps"]
@@ -138,10 +145,7 @@ def split_at_creases(F: np.ndarray, labels: np.ndarray, TT: np.ndarray, FN: np.n
 def _stands_across(V, F, FN, faces, s, tol, farthest: bool = False) -> np.ndarray:
     """Which of ``faces`` stand across the analytic surface ``s`` (far and turned away); far
     by the corners' RMS distance, or with ``farthest`` by the farthest corner's."""
-    if farthest:
-        far = np.abs(s.distance(V[F[faces]].reshape(-1, 3))).reshape(-1, 3).max(axis=1)
-    else:
-        far = corner_rms(V, F, faces, s)
+    far = (corner_max_dev if farthest else corner_rms)(V, F, faces, s)
     return (far > STRAY_TOL * tol) & (normal_angle(V, F, FN, faces, s) > STRAY_ANGLE)
 
 

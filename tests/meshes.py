@@ -199,3 +199,20 @@ def blind_hole(n: int = 12, rings: int = 40, h: float = 0.5, r: float = 1.0,
         F += [np.c_[a + i, a + j, b + j], np.c_[a + i, b + j, b + i]]
     V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
     return V, np.concatenate(F).astype(np.int64)
+
+
+def rounded_box(a: float = 2.0, r: float = 1.0, n: int = 12, noise: float = 0.0, seed: int = 0):
+    """A box [-a-r, a+r]^3 with every edge rounded with radius ``r``: a cube whose sides are
+    ``n`` x ``n`` grids, each point ``p`` moved to ``clamp(p, -a, a) + r * unit(p - clamp)``
+    (planes, quarter-cylinder fillets, sphere-octant corners), then by Gaussian noise of
+    ``noise``. Returns V, F and each face's true piece: ``kind`` (0 plane, 1 fillet,
+    2 corner) and the sign pattern of its clamped centroid (the corner it belongs to)."""
+    V, F = cube(n)
+    V = V * (a + r)
+    Q = np.clip(V, -a, a)
+    D = V - Q
+    V = Q + r * D / np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-12)
+    C = (V[F].mean(axis=1))
+    kind = (np.abs(C) > a + 1e-9).sum(axis=1) - 1
+    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
+    return V, F, kind, np.sign(C)

@@ -439,3 +439,38 @@ def test_a_noisy_blind_holes_bottom_labelled_with_its_wall_gets_its_own_plane(n,
     assert res.surfaces[cap].kind == "plane"
     assert np.flatnonzero(L == cap).tolist() == list(range(n))
     assert abs(res.surfaces[cap].params["normal"][2]) > 0.99
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_the_corners_of_a_noisy_rounded_box_dealt_out_between_their_fillets_become_spheres(seed):
+    """A box rounded with radius 1 (noise 0.08 x the edge length), its eight sphere-octant
+    corners (24 faces each) dealt out between the three fillets that meet there, face by face
+    to the fillet it lies nearest to, as the heat fields left them on tuning-3
+    rounded_box_s6011_irregular_n0.05 (17 faces a corner, no seed of their own). Each fillet's
+    cylinder explains its corner faces within tolerance; the sphere where the fillets' axes meet
+    explains them twice as closely (:func:`~igl_heatseg.surfaces.seams.corner_blends`)."""
+    from meshes import rounded_box
+
+    V, F, kind, sign = rounded_box(a=2.0, r=1.0, n=12, noise=0.04, seed=seed)
+    C = V[F].mean(axis=1)
+    big = np.abs(C) > 2.0
+    key = np.c_[kind, sign * big].astype(np.int64)
+    corner = kind == 2
+    # a corner face goes to the fillet whose axis its centroid lies closest to the end of
+    j = np.argmin(np.where(big, np.abs(C) - 2.0, np.inf), axis=1)
+    dealt = key.copy()
+    dealt[corner, 0] = 1
+    dealt[corner, 1 + j[corner]] = 0
+    _, truth = np.unique(key, axis=0, return_inverse=True)
+    _, start = np.unique(dealt, axis=0, return_inverse=True)
+    res = refine_segmentation(V, F, start.ravel().astype(np.int64))
+    L, truth = np.asarray(res.labels), truth.ravel()
+    assert sum(s.kind == "cylinder" for s in res.surfaces) == 12
+    found = 0
+    for t in np.unique(truth[corner]):
+        m = truth == t
+        own = np.bincount(L[m]).argmax()
+        s = res.surfaces[own]
+        found += bool((L[m] == own).mean() >= 0.9 and m[L == own].mean() >= 0.9
+                      and s.kind == "sphere" and abs(s.params["radius"] - 1.0) < 0.15)
+    assert found >= 7

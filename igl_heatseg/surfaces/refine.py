@@ -30,7 +30,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    its wall's segment: :func:`~igl_heatseg.surfaces.strays.cut_caps`). On an exact
    tessellation, small pieces a segment holds only across creases leave it, unless they lie
    on its surface (a coarse small hole's facets)
-   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`).
+   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`). Where three or more fillets of
+   one radius meet and deal out their corner between them, the sphere their axes imply gets
+   its own segment (:func:`~igl_heatseg.surfaces.seams.corner_blends`).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
@@ -53,7 +55,7 @@ from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
 from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
-from .seams import seam_blends
+from .seams import corner_blends, corner_sphere, seam_blends
 from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
@@ -733,6 +735,12 @@ def refine_segmentation(
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if split and not exact:  # (an exact tessellation's caps leave at their creases, below)
         n_split += cut_caps(V, F, labels, fits, tol, TT, FN, W)
+    corners = corner_blends(V, F, labels, fits, tol, W, FN) if split else []
+    n_split += len(corners)
+    guesses = {c: fits[c] for c in corners}
+    corner_of = np.full(len(F), -1)
+    for c in corners:
+        corner_of[labels == c] = c
     if exact:  # no segment of a CAD tessellation runs across a crease
         labels, crease_moved = split_at_creases(F, labels, TT, FN, face_areas(V, F), V, tol, W)
         if crease_moved:  # a piece sent to a neighbour's piece that left too is cut off
@@ -749,6 +757,11 @@ def refine_segmentation(
     labels = rank[inv].astype(np.int64)
     surfaces = [fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
                 for k in range(len(order))]
+    for k in np.unique(labels[corner_of >= 0]):  # a corner's sphere, not a cone as close
+        faces = np.flatnonzero(labels == k)
+        if (corner_of[faces] == corner_of[faces[0]]).all():
+            s = corner_sphere(V, F, faces, tol, guesses[corner_of[faces[0]]], W, FN)
+            surfaces[k] = surfaces[k] if s is None else s
     surfaces, coaxial = snap_to_axes(V, F, labels, surfaces, tol, W, FN)
     timings["final_fit"] = time.perf_counter() - t
     progress("surfaces", 1.0)

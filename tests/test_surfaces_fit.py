@@ -402,6 +402,29 @@ def test_noise_level_clean_meshes_near_zero():
         assert noise_level(V, F) < bound * h
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_clean_curved_mesh_without_coplanar_faces_is_an_exact_tessellation(seed):
+    """A part that is nearly all curved, densely and irregularly tessellated, has too few
+    coplanar face pairs for the first test of ``exact_tessellation`` (f24
+    saddle_boss_s24004_irregular_n0: 4.5 % of its edges, and refined as a noisy mesh its big
+    cylinder stayed in 6 segments); its noise level, 0 but for round-off, says it is exact.
+    Noise of 0.05 edge lengths (the least in the generated sets) is not."""
+    import igl
+
+    from igl_heatseg.surfaces.tolerance import exact_tessellation
+
+    V, F = igl.loop(*igl.icosahedron(), 3)
+    rng = np.random.default_rng(seed)
+    V = V + rng.normal(scale=0.3 * igl.avg_edge_length(V, F), size=V.shape)  # irregular
+    V /= np.linalg.norm(V, axis=1, keepdims=True)                            # on the sphere
+    h = igl.avg_edge_length(V, F)
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    assert (np.einsum("fj,fkj->fk", FN, FN[TT]) > 1 - 1e-9).mean() < 0.01  # no coplanar pairs
+    assert exact_tessellation(V, F)
+    assert not exact_tessellation(with_normal_noise(V, F, 0.05 * h, seed), F)
+
+
 @pytest.mark.parametrize("rel_sigma", [0.01, 0.05])
 @pytest.mark.parametrize("mesh", ["cylinder", "torus"])
 def test_noise_level_measures_normal_noise(mesh, rel_sigma):

@@ -330,10 +330,12 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
         u = corner_sphere(V, F, patch, tol, guess, W, FN)
         if u is None:
             continue
+        free = fit_faces(V, F, patch, tol, kinds=("sphere",), W=W, FN=FN)  # the best sphere
+        best = min(u.rms, free.rms) if free.kind == "sphere" else u.rms
         own = [corner_rms(V, F, patch[labels[patch] == k], fits[k]) for k in
                np.unique(labels[patch])]
         own_rms = float(np.sqrt(np.mean(np.concatenate(own) ** 2)))
-        if own_rms < CORNER_BEAT * u.rms:
+        if own_rms < CORNER_BEAT * best:
             continue
         log.debug("corner at %s: a sphere of radius %.3g within %.3g over %d faces of "
                   "segments %s (within %.3g)", np.round(c, 3), u.params["radius"], u.rms,
@@ -349,10 +351,13 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
 
 
 def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None) -> Surface | None:
-    """The sphere of a corner's faces: fitted to them, when that fit is within ``tol`` and its
-    radius within :data:`CORNER_RADIUS_SPREAD` of ``guess``'s; else ``guess`` (the sphere its
-    fillets imply), when it is within ``tol`` of them (a few noisy faces leave the radius
-    loose); else None.
+    """The sphere of a corner's faces: ``guess`` (the sphere its fillets imply, tangent to
+    them), when it is within ``tol`` of the faces; else the sphere fitted to them, when that is
+    within ``tol`` and its radius within :data:`CORNER_RADIUS_SPREAD` of ``guess``'s; else None.
+
+    A fit to a few noisy faces leaves the radius loose (3.42 for fillets of 3.1 on tuning-3
+    rounded_box_s6011_irregular_n0.05), and a B-Rep edge between a sphere and a fillet it
+    should touch tangentially is then an ill-conditioned intersection.
 
     Parameters
     ----------
@@ -383,12 +388,17 @@ def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None) -> S
     >>> s = corner_sphere(V, F, cap, 0.01, guess)
     >>> s.kind, round(s.params["radius"], 6), s.rms < 1e-6
     ('sphere', 1.0, True)
+    >>> corner_sphere(V, F, cap, 0.01, Surface("sphere", {"center": np.zeros(3),
+    ...                                                   "radius": 1.02})).params["radius"]
+    1.0
     """
+    P, N, w = vertex_samples(V, F, faces, W)
+    u = fitted_surface("sphere", dict(guess.params), P, N, w, float(face_areas(V, F[faces]).sum()))
+    if u is not None and explains(u, tol):
+        return u
     u = fit_faces(V, F, faces, tol, kinds=("sphere",), W=W, FN=FN)
     r = guess.params["radius"]
     if (u.kind == "sphere" and explains(u, tol)
             and abs(u.params["radius"] - r) <= CORNER_RADIUS_SPREAD * r):
         return u
-    P, N, w = vertex_samples(V, F, faces, W)
-    u = fitted_surface("sphere", dict(guess.params), P, N, w, float(face_areas(V, F[faces]).sum()))
-    return u if u is not None and explains(u, tol) else None
+    return None

@@ -421,6 +421,8 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
     if time_limit is not None and not (np.isfinite(time_limit) and time_limit >= 0):
         raise MeshError(f"time_limit must be a number of seconds >= 0, got {time_limit!r}")
     progress = progress or (lambda stage, frac: None)
+    surfaces = [geometry.sphere_poles_away(s, V[np.unique(F[labels == a])])
+                for a, s in enumerate(surfaces)]
     ctx = _tolerances(V, F, surfaces, tol)
     limit = ctx["limit"] = TimeLimit(time_limit)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces

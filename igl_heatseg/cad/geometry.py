@@ -9,6 +9,7 @@ segments get a B-spline surface in :mod:`.freeform`.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 
@@ -45,7 +46,7 @@ from igl_heatseg.surfaces.model import Surface  # noqa: E402
 logger = logging.getLogger(__name__)
 
 __all__ = ["any_perp", "occ_surface", "seam_away_from", "seam_frame", "settle_on_surfaces",
-           "start_at_seam", "Projector",
+           "sphere_poles_away", "start_at_seam", "Projector",
            "onto_surfaces", "edge_curve", "curve_distance", "polyline_distance"]
 
 #: Points on a line or circle within this fraction of the bbox diagonal make an exact
@@ -116,7 +117,7 @@ def seam_frame(s: Surface):
         axis = np.asarray(p["axis"], dtype=np.float64)
         origin = p["point"] if s.kind == "cylinder" else p.get("apex", p.get("center"))
     elif s.kind == "sphere":
-        axis, origin = np.array([0.0, 0.0, 1.0]), p["center"]
+        axis, origin = np.asarray(p.get("axis", (0.0, 0.0, 1.0)), dtype=np.float64), p["center"]
     else:
         return None
     return np.asarray(origin, dtype=np.float64), axis, _seam_x(axis)
@@ -180,12 +181,60 @@ def occ_surface(s: Surface, seam_angle: float = 0.0):
         return Geom_ConicalSurface(_ax3(p["apex"], p["axis"], s.outward, seam_angle),
                                    float(p["half_angle"]), 0.0)
     if s.kind == "sphere":
-        return Geom_SphericalSurface(_ax3(p["center"], [0.0, 0.0, 1.0], s.outward, seam_angle),
-                                     float(p["radius"]))
+        return Geom_SphericalSurface(_ax3(p["center"], p.get("axis", (0.0, 0.0, 1.0)),
+                                          s.outward, seam_angle), float(p["radius"]))
     if s.kind == "torus":
         return Geom_ToroidalSurface(_ax3(p["center"], p["axis"], s.outward, seam_angle),
                                     float(p["major_radius"]), float(p["minor_radius"]))
     raise ValueError(f"no analytic OCC surface for kind {s.kind!r}")
+
+
+#: A sphere segment all within this angle (radians) of its mean direction from the centre is
+#: built on a sphere whose poles lie square to that direction (:func:`sphere_poles_away`).
+SPHERE_CAP_ANGLE = math.radians(80.0)
+
+
+def sphere_poles_away(s: Surface, P: np.ndarray) -> Surface:
+    """A sphere whose frame puts the segment on its equator, far from both poles.
+
+    OCC's sphere has its poles on the frame's axis (z by default) and its seam on a meridian.
+    A rounded box's corner is an octant of a sphere: on the default frame its corner vertex is a
+    pole and one of its edges the seam, and its trim fails. When every point of the segment lies
+    within :data:`SPHERE_CAP_ANGLE` of their mean direction from the centre, the returned
+    sphere carries an ``axis`` parameter square to that direction (used by :func:`seam_frame`
+    and :func:`occ_surface`); otherwise, or for another kind, ``s`` itself.
+
+    Parameters
+    ----------
+    s : Surface
+    P : (p, 3) float64
+        The segment's vertices.
+
+    Returns
+    -------
+    Surface
+
+    Examples
+    --------
+    >>> s = Surface("sphere", {"center": np.zeros(3), "radius": 1.0})
+    >>> P = np.array([[1.0, 1, 0.5], [1, 0.5, 1], [0.5, 1, 1]]) / 1.5   # about (1, 1, 1)
+    >>> a = sphere_poles_away(s, P).params["axis"]
+    >>> round(float(a @ [1, 1, 1]), 9), round(float(np.linalg.norm(a)), 9)
+    (0.0, 1.0)
+    >>> sphere_poles_away(s, np.array([[0.0, 0, 1], [0, 0, -1], [1, 0, 0]])) is s
+    True
+    """
+    if s.kind != "sphere" or len(P) == 0:
+        return s
+    d = P - s.params["center"]
+    d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+    m = d.mean(axis=0)
+    if np.linalg.norm(m) < 1e-9:
+        return s
+    m /= np.linalg.norm(m)
+    if (d @ m).min() < math.cos(SPHERE_CAP_ANGLE):
+        return s
+    return dataclasses.replace(s, params={**s.params, "axis": any_perp(m)})
 
 
 def seam_away_from(s: Surface, P: np.ndarray) -> float:

@@ -4,9 +4,11 @@ process per part), the same metrics and bars (``surface_table.score``).
 Each part of ``SET/manifest.json`` is segmented with ``segment_robust`` in a worker process and
 scored against its B-Rep labels and types; one JSON line per part goes to ``OUT`` (the metrics,
 the pass bars, seconds, and the type confusions over 0.5 % of the area, ``true>predicted``), and
-a summary line to stdout. ``REPO`` (environment) puts another checkout first on ``sys.path``
-(a ``git worktree`` of the commit to compare with); ``SAVE_LABELS`` (a folder) keeps each
-part's labels as ``NAME.npy``.
+a summary line to stdout. A mesh the strict check refuses (a generated coarse export with
+non-manifold vertices) is segmented repaired, as ``--repair`` would, scored on its input faces,
+and its row says what was wrong (``repaired``). ``REPO`` (environment) puts another checkout
+first on ``sys.path`` (a ``git worktree`` of the commit to compare with); ``SAVE_LABELS`` (a
+folder) keeps each part's labels as ``NAME.npy``.
 
 Usage::
 
@@ -42,14 +44,25 @@ def score_part(args) -> dict:
     folder, entry = args
     part = st.load_part(Path(folder), entry)
     t0 = time.perf_counter()
-    try:  # a generated part the strict check refuses is a row too (non-manifold, say)
-        seg = ih.segment_robust(ih.validate_mesh(part["V"], part["F"]))
+    repaired = None
+    try:  # a generated part the strict check refuses is repaired, as `--repair` would
+        try:
+            mesh = ih.validate_mesh(part["V"], part["F"])
+        except ih.MeshError as e:
+            mesh = ih.validate_mesh(part["V"], part["F"], repair=True)
+            repaired = str(e).split(" (use --repair")[0]
+        seg = ih.segment_robust(mesh)
     except Exception as e:  # a benchmark row, not a crash of the whole run
         return dict(name=entry["name"], error=repr(e))
     seconds = time.perf_counter() - t0
-    labels = np.asarray(seg.labels)
+    labels = mesh.input_face_labels(seg.labels)  # the input's faces, which the truth labels
     types = [s.kind for s in seg.surfaces] if seg.surfaces is not None else None
+    if (labels < 0).any():  # input faces repair dropped with no neighbour: one unfitted segment
+        labels = np.where(labels < 0, labels.max() + 1, labels)
+        types = None if types is None else types + ["freeform"]
     row = st.score(part, labels, types)
+    if repaired:
+        row["repaired"] = repaired
     if types is not None and part.get("kinds") is not None:
         pk, tk = st.face_kinds(labels, types), part["kinds"]
         share = part["area"] / part["area"].sum()

@@ -275,6 +275,38 @@ def test_capsule_hemisphere_cap_and_closed_sphere():
     assert fid["volume"] == pytest.approx(4 / 3 * math.pi * R**3, rel=1e-6)
 
 
+def test_rounded_box_corners_are_built_on_spheres_whose_poles_lie_away_from_them():
+    """A box rounded with radius 1: its eight corners are sphere octants. On a sphere framed
+    along z, an octant's corner vertex is a pole and one of its edges lies on the seam meridian
+    (tuning-3 rounded_box_s6011_irregular_n0.05: a corner's trim failed there); each corner is
+    built on a frame whose axis is square to the corner's direction from the centre."""
+    from meshes import rounded_box
+
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    V, F, kind, sign = rounded_box(a=2.0, r=1.0, n=12)
+    C = V[F].mean(axis=1)
+    _, labels = np.unique(np.c_[kind, sign * (np.abs(C) > 2.0)], axis=0, return_inverse=True)
+    labels = labels.ravel()
+    corners = set(labels[kind == 2].tolist())
+    surfs = [fit_faces(V, F, np.flatnonzero(labels == k), 0.01,
+                       kinds=("sphere",) if k in corners else None)
+             for k in range(labels.max() + 1)]
+    assert sum(s.kind == "sphere" for s in surfs) == 8
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 26
+    spheres = [f for f in faces_of(res.shape)
+               if BRepAdaptor_Surface(f).GetType() == GeomAbs_SurfaceType.GeomAbs_Sphere]
+    assert len(spheres) == 8
+    for f in spheres:
+        sph = BRepAdaptor_Surface(f).Sphere()
+        c, ax = sph.Location(), sph.Position().Direction()
+        d = face_points(f, 0.01) - [c.X(), c.Y(), c.Z()]
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        assert np.abs(d @ [ax.X(), ax.Y(), ax.Z()]).max() < 0.9  # no point near a pole
+
+
 def test_freeform_height_field_one_bspline_face():
     n = 24
     t = np.linspace(0, 1, n + 1)

@@ -204,6 +204,27 @@ def _axes_meet(cyls) -> tuple[np.ndarray, float, float]:
     return c, gap, eig
 
 
+def _fillets_meet(x, ks, fits, tol):
+    """(centre, mean radius, labels) of the cylinders ``ks`` around a vertex at ``x`` when at
+    least three of them meet in a corner (radii within CORNER_RADIUS_SPREAD, axes within
+    CORNER_AXIS_GAP of one point, ``x`` about a radius from it), dropping the cylinder whose
+    axis passes farthest while the rest do not (a corner's piece typed cylinder); else None."""
+    ks = sorted(ks)
+    while len(ks) >= 3:
+        r = np.array([fits[k].params["radius"] for k in ks])
+        c, gap, _ = _axes_meet([fits[k] for k in ks])
+        rm = float(r.mean())
+        if (np.ptp(r) <= CORNER_RADIUS_SPREAD * rm and gap <= CORNER_AXIS_GAP * rm + tol
+                and abs(np.linalg.norm(x - c) - rm) <= CORNER_RADIUS_SPREAD * rm + tol):
+            return c, rm, ks
+        if not np.isfinite(gap):
+            return None
+        far = [np.linalg.norm((np.eye(3) - np.outer(a, a)) @ (c - fits[k].params["point"]))
+               for k in ks for a in [fits[k].params["axis"]]]
+        ks.pop(int(np.argmax(far)))
+    return None
+
+
 def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
                   nxt: int | None = None) -> list:
     """Give the sphere where three or more cylinders of one radius meet a segment of its own,
@@ -289,15 +310,10 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
     corners: list = []  # [centre, radius, set of labels, junction vertices]
     for v in np.flatnonzero(np.diff(M.indptr) >= 3):
         around = M.indices[M.indptr[v]:M.indptr[v + 1]]
-        ks = sorted(int(k) for k in around if k in cyl)
-        if len(ks) < 3:
+        met = _fillets_meet(V[v], [int(k) for k in around if k in cyl], fits, tol)
+        if met is None:
             continue
-        r = np.array([fits[k].params["radius"] for k in ks])
-        c, gap, _ = _axes_meet([fits[k] for k in ks])
-        rm = float(r.mean())
-        if (np.ptp(r) > CORNER_RADIUS_SPREAD * rm or gap > CORNER_AXIS_GAP * rm + tol
-                or abs(np.linalg.norm(V[v] - c) - rm) > CORNER_RADIUS_SPREAD * rm + tol):
-            continue
+        c, rm, ks = met
         for corner in corners:  # the same corner seen from another junction vertex
             if np.linalg.norm(corner[0] - c) <= CORNER_RADIUS_SPREAD * rm + tol:
                 corner[2].update(ks)
@@ -318,11 +334,12 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
             if abs(bulk) < 0.5 * rm:  # a cylinder running past the corner, not ending at it
                 continue
             patch.append(fk[(np.sign(bulk) * t < 0) & near[fk]])
-        for k in np.unique(M[verts].indices):  # a piece of the corner with a segment already
+        patch = np.unique(np.concatenate(patch)) if patch else np.zeros(0, dtype=np.int64)
+        around = np.union1d(M[verts].indices, M[np.unique(F[patch])].indices)
+        for k in around:  # a piece of the corner with a segment already
             fk = np.flatnonzero(labels == k)
             if k not in ks and near[fk].all():
-                patch.append(fk)
-        patch = np.unique(np.concatenate(patch)) if patch else np.zeros(0, dtype=np.int64)
+                patch = np.union1d(patch, fk)
         patch = patch[~taken[patch]]
         if len(patch) < CORNER_MIN_FACES:
             continue

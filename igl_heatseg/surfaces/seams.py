@@ -235,12 +235,14 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
     its own (a noisy irregular mesh: 17 faces a corner) it is dealt out between the fillets.
     The corner here: a vertex where the segments of three or more cylinders meet, their radii
     within :data:`CORNER_RADIUS_SPREAD`, their axes within :data:`CORNER_AXIS_GAP` of one
-    point ``c``. Its faces: those of the cylinders' segments within the radius (plus
-    3 ``tol``) of ``c`` and beyond ``c`` along their own axis (the segment's bulk on the
-    other side), and any segment at the vertex lying wholly that close to ``c``. It becomes a
-    segment when a sphere within ``tol``, of the cylinders' radius, fits it
-    :data:`CORNER_BEAT` times closer than they do, and it has :data:`CORNER_MIN_FACES` faces
-    or more.
+    point ``c`` (a cylinder whose axis misses while the others meet is left out: a piece of
+    the corner typed cylinder). Its faces: those of the cylinders' segments within the radius
+    (plus 3 ``tol``) of ``c`` and beyond ``c`` along their own axis (the segment's bulk on the
+    other side), and any other segment lying wholly that close to ``c`` that touches them or
+    the vertex. They become a segment when a sphere fits them :data:`CORNER_BEAT` times closer
+    (RMS) than their segments' surfaces do (a freeform piece fits nothing), they are
+    :data:`CORNER_MIN_FACES` faces or more, and :func:`corner_sphere` gives them a surface
+    (the sphere the fillets imply where that is within ``tol``).
 
     Parameters
     ----------

@@ -60,6 +60,7 @@ from .segment_fit import (
     GROW_ANGLE,
     GROW_TOL,
     MIN_REGION_FACES,
+    closer_kind,
     corner_max_dev,
     corner_rms,
     explains,
@@ -757,6 +758,10 @@ def refine_segmentation(
     labels = rank[inv].astype(np.int64)
     surfaces = [fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
                 for k in range(len(order))]
+    if not exact:  # a loose cylinder where a torus fits at the noise (the median fit's)
+        noise = float(np.median([s.rms for s in surfaces if s.is_analytic] or [math.inf]))
+        surfaces = [closer_kind(V, F, np.flatnonzero(labels == k), s, tol, W, FN, noise)
+                    for k, s in enumerate(surfaces)]
     for k in np.unique(labels[corner_of >= 0]):  # a corner's sphere, not a cone as close
         faces = np.flatnonzero(labels == k)
         if (corner_of[faces] == corner_of[faces[0]]).all():

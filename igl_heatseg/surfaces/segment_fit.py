@@ -564,12 +564,13 @@ def closer_kind(V, F, faces, s: Surface, tol: float, W=None, FN=None,
     >>> t = closer_kind(V, F, np.arange(len(F)), s, 0.06)
     >>> s.kind, t.kind, round(t.params["major_radius"], 1), round(t.params["minor_radius"], 1)
     ('cylinder', 'torus', 6.0, 1.0)
+    >>> closer_kind(V, F, np.arange(len(F)), s, 0.06, noise=0.01).kind   # not at that noise
+    'cylinder'
     """
-    if not s.is_analytic or s.rms <= CLOSER_KIND_LOOSE * tol:
+    if s.kind != "cylinder" or s.rms <= CLOSER_KIND_LOOSE * tol:
         return s
-    for kind in (("torus",) if s.kind == "cylinder" else ()):
-        g = fit_faces(V, F, faces, tol, kinds=(kind,), W=W, FN=FN)
-        if (g.kind == kind and explains(g, tol) and g.rms * CLOSER_KIND_RATIO <= s.rms
-                and g.rms <= CLOSER_KIND_NOISE * noise):
-            return g
+    g = fit_faces(V, F, faces, tol, kinds=("torus",), W=W, FN=FN)
+    if (g.kind == "torus" and explains(g, tol) and g.rms * CLOSER_KIND_RATIO <= s.rms
+            and g.rms <= CLOSER_KIND_NOISE * noise):
+        return g
     return s

@@ -212,7 +212,7 @@ def rounded_box(a: float = 2.0, r: float = 1.0, n: int = 12, noise: float = 0.0,
     Q = np.clip(V, -a, a)
     D = V - Q
     V = Q + r * D / np.maximum(np.linalg.norm(D, axis=1, keepdims=True), 1e-12)
-    C = (V[F].mean(axis=1))
+    C = V[F].mean(axis=1)
     kind = (np.abs(C) > a + 1e-9).sum(axis=1) - 1
     V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
     return V, F, kind, np.sign(C)

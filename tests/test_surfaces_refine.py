@@ -447,8 +447,9 @@ def test_the_corners_of_a_noisy_rounded_box_dealt_out_between_their_fillets_beco
     corners (24 faces each) dealt out between the three fillets that meet there, face by face
     to the fillet it lies nearest to, as the heat fields left them on tuning-3
     rounded_box_s6011_irregular_n0.05 (17 faces a corner, no seed of their own). Each fillet's
-    cylinder explains its corner faces within tolerance; the sphere where the fillets' axes meet
-    explains them twice as closely (:func:`~igl_heatseg.surfaces.seams.corner_blends`)."""
+    cylinder explains its corner faces within tolerance; a sphere centred where the fillets'
+    axes meet explains them at least 1.5 times as closely
+    (:func:`~igl_heatseg.surfaces.seams.corner_blends`)."""
     from meshes import rounded_box
 
     V, F, kind, sign = rounded_box(a=2.0, r=1.0, n=12, noise=0.04, seed=seed)

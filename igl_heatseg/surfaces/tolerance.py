@@ -244,9 +244,11 @@ def vertex_tolerance(V, F, noise: float | None = None) -> float:
     (0.00079, 0.03486)
     """
     V, F = check_mesh(V, F)
-    if noise is None:
-        noise = 0.0 if exact_tessellation(V, F) else noise_level(V, F)
     h = float(igl.avg_edge_length(V, F))
+    if noise is None:  # 0 on an exact tessellation (one noise estimate serves both tests)
+        share = _coplanar_share(V, F)
+        noise = 0.0 if share is not None and share >= EXACT_FLAT_SHARE else noise_level(V, F)
+        noise = 0.0 if share is not None and _quiet(noise, h) else noise
     return float(K_NOISE * noise + K_FLOOR * h)
 
 
@@ -285,12 +287,24 @@ def exact_tessellation(V, F) -> bool:
     (True, False)
     """
     V, F = check_mesh(V, F)
+    share = _coplanar_share(V, F)
+    if share is None:
+        return False
+    return share >= EXACT_FLAT_SHARE or _quiet(noise_level(V, F), igl.avg_edge_length(V, F))
+
+
+def _coplanar_share(V, F) -> float | None:
+    """Share of the interior edges that join two exactly coplanar faces (None: no interior
+    edge)."""
     TT = igl.triangle_triangle_adjacency(F)[0]
     f, e = np.nonzero(TT > np.arange(len(F))[:, None])
     if len(f) == 0:
-        return False
+        return None
     FN = igl.per_face_normals(V, F, np.zeros(3))
     cos = np.einsum("ij,ij->i", FN[f], FN[TT[f, e]])
-    if np.mean(cos >= 1.0 - EXACT_FLAT_COS) >= EXACT_FLAT_SHARE:
-        return True
-    return bool(noise_level(V, F) <= EXACT_NOISE * igl.avg_edge_length(V, F))
+    return float(np.mean(cos >= 1.0 - EXACT_FLAT_COS))
+
+
+def _quiet(noise: float, h: float) -> bool:
+    """A noise level too low to be noise: at most EXACT_NOISE mean edge lengths ``h``."""
+    return bool(noise <= EXACT_NOISE * h)

@@ -756,14 +756,14 @@ def refine_segmentation(
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     labels = rank[inv].astype(np.int64)
-    surfaces = [fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN)
-                for k in range(len(order))]
+    faces_of = [np.flatnonzero(labels == k) for k in range(len(order))]
+    surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
     if not exact:  # a loose cylinder where a torus fits at the noise (the median fit's)
         noise = float(np.median([s.rms for s in surfaces if s.is_analytic] or [math.inf]))
-        surfaces = [closer_kind(V, F, np.flatnonzero(labels == k), s, tol, W, FN, noise)
-                    for k, s in enumerate(surfaces)]
+        surfaces = [closer_kind(V, F, faces, s, tol, W, FN, noise)
+                    for faces, s in zip(faces_of, surfaces, strict=True)]
     for k in np.unique(labels[corner_of >= 0]):  # a corner's sphere, not a cone as close
-        faces = np.flatnonzero(labels == k)
+        faces = faces_of[k]
         if (corner_of[faces] == corner_of[faces[0]]).all():
             s = corner_sphere(V, F, faces, tol, guesses[corner_of[faces[0]]], W, FN)
             surfaces[k] = surfaces[k] if s is None else s

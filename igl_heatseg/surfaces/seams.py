@@ -346,10 +346,10 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
         if len(patch) < CORNER_MIN_FACES:
             continue
         guess = Surface("sphere", {"center": c, "radius": rm})
-        u = corner_sphere(V, F, patch, tol, guess, W, FN)
+        free = fit_faces(V, F, patch, tol, kinds=("sphere",), W=W, FN=FN)  # the best sphere
+        u = corner_sphere(V, F, patch, tol, guess, W, FN, free)
         if u is None:
             continue
-        free = fit_faces(V, F, patch, tol, kinds=("sphere",), W=W, FN=FN)  # the best sphere
         best = min(u.rms, free.rms) if free.kind == "sphere" else u.rms
         own = [corner_rms(V, F, patch[labels[patch] == k], fits[k]) for k in
                np.unique(labels[patch])]
@@ -369,7 +369,8 @@ def corner_blends(V, F, labels, fits: dict, tol: float, W=None, FN=None,
     return made
 
 
-def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None) -> Surface | None:
+def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None,
+                  free: Surface | None = None) -> Surface | None:
     """The sphere of a corner's faces: ``guess`` (the sphere its fillets imply, tangent to
     them), when it is within ``tol`` of the faces; else the sphere fitted to them, when that is
     within ``tol`` and its radius within :data:`CORNER_RADIUS_SPREAD` of ``guess``'s; else None.
@@ -392,6 +393,8 @@ def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None) -> S
         Positions the normals come from.
     FN : (m, 3) float64, optional
         Unit face normals.
+    free : Surface, optional
+        The faces' sphere fit, when the caller has it (``fit_faces`` with ``kinds=("sphere",)``).
 
     Returns
     -------
@@ -415,7 +418,7 @@ def corner_sphere(V, F, faces, tol: float, guess: Surface, W=None, FN=None) -> S
     u = fitted_surface("sphere", dict(guess.params), P, N, w, float(face_areas(V, F[faces]).sum()))
     if u is not None and explains(u, tol):
         return u
-    u = fit_faces(V, F, faces, tol, kinds=("sphere",), W=W, FN=FN)
+    u = fit_faces(V, F, faces, tol, kinds=("sphere",), W=W, FN=FN) if free is None else free
     r = guess.params["radius"]
     if (u.kind == "sphere" and explains(u, tol)
             and abs(u.params["radius"] - r) <= CORNER_RADIUS_SPREAD * r):

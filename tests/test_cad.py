@@ -118,6 +118,12 @@ def face_types(shape):
     return sorted(BRepAdaptor_Surface(f).GetType().name for f in faces_of(shape))
 
 
+def faces_of_type(shape, kind):
+    """The faces of ``shape`` whose surface is ``GeomAbs_SurfaceType.<kind>``."""
+    return [f for f in faces_of(shape)
+            if BRepAdaptor_Surface(f).GetType() == getattr(GeomAbs_SurfaceType, kind)]
+
+
 # --------------------------------------------------------------------------- tests
 
 
@@ -191,8 +197,7 @@ def test_capped_cylinder_three_faces_right_radius():
     res = build_brep(V, F, labels, surfs)
     fid = res.fidelity
     assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 3
-    cyl = [f for f in faces_of(res.shape)
-           if BRepAdaptor_Surface(f).GetType() == GeomAbs_SurfaceType.GeomAbs_Cylinder]
+    cyl = faces_of_type(res.shape, "GeomAbs_Cylinder")
     assert len(cyl) == 1
     assert BRepAdaptor_Surface(cyl[0]).Cylinder().Radius() == pytest.approx(R, rel=1e-12)
     assert fid["volume"] == pytest.approx(math.pi * R**2 * H, rel=1e-6)
@@ -296,8 +301,7 @@ def test_rounded_box_corners_are_built_on_spheres_whose_poles_lie_away_from_them
     res = build_brep(V, F, labels, surfs)
     fid = res.fidelity
     assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 26
-    spheres = [f for f in faces_of(res.shape)
-               if BRepAdaptor_Surface(f).GetType() == GeomAbs_SurfaceType.GeomAbs_Sphere]
+    spheres = faces_of_type(res.shape, "GeomAbs_Sphere")
     assert len(spheres) == 8
     for f in spheres:
         sph = BRepAdaptor_Surface(f).Sphere()

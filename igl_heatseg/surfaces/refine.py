@@ -65,6 +65,7 @@ from .segment_fit import (
     corner_rms,
     explains,
     fit_faces,
+    mean_normal_agrees,
     normal_angle,
     normals_agree,
     refit_segments,
@@ -149,6 +150,17 @@ REGROW_MIN_FACES_NOISY = 20
 #: or two faces are never a face of the part; a coarse export's is 1e-3 - 2e-3 (500 - 1,000
 #: faces), where a chamfer can be two triangles.
 SHARD_AREA = 5e-4
+
+#: ... and on a noisy mesh a shard whose corners are within SHARD_ON_TOL x tol (RMS) of a
+#: neighbour's surface joins it when the shard's mean normal (area-weighted sum of its face
+#: normals) is within GROW_ANGLE of the surface's there, though its faces' own normals are not:
+#: at noise 0.2 a fifth of the faces' normals are over GROW_ANGLE off, so a shard of 3-7 faces
+#: on a narrow cylinder failed :func:`~.segment_fit.normals_agree` (tuning-3
+#: domed_cap_s6027_frontal_n0.2: three shards of truth's cylinder 3 at 0.29-0.44 tol from its
+#: segment's surface stayed segments). Held to tol, not GROW_TOL x tol: the corners of a
+#: chamfer one row of triangles wide all lie on its neighbours, and its mean normal, not its
+#: distance, keeps it.
+SHARD_ON_TOL = 1.0
 
 #: On a noisy mesh a segment whose surface explains it (RMS within tol) but fits worse than
 #: this x tol fits worse than the merges accept of a union (the noise level tol / K_NOISE times
@@ -430,7 +442,8 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
 def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
                    exact=True) -> np.ndarray:
     """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
-    RMS within GROW_TOL x tol, normals agreeing) join it; unexplained ones of fewer than
+    RMS within GROW_TOL x tol, normals agreeing; on a noisy mesh also within SHARD_ON_TOL x tol
+    with their mean normal agreeing) join it; unexplained ones of fewer than
     MIN_REGION_FACES faces join the nearest neighbour whatever the distance. A true small face
     (a chamfer two triangles wide) is off its neighbours' surfaces and explained by its own: it
     stays. On a noisy mesh (not ``exact``) a segment of fewer than MIN_REGION_FACES faces,
@@ -449,10 +462,12 @@ def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
         j = int(np.argmin(d))
         tiny = len(faces) < MIN_REGION_FACES and not explains(fits[k], tol)
         on = d[j] <= GROW_TOL * tol and normals_agree(V, F, FN, faces, fits[nb[j]])
+        small = face_areas(V, F[faces]).sum() < SHARD_AREA * total
+        on = on or (not exact and small and d[j] <= SHARD_ON_TOL * tol
+                    and fits[nb[j]].is_analytic and mean_normal_agrees(V, F, faces, fits[nb[j]]))
         if on or tiny:
             labels[faces] = nb[j]
-        elif not exact and len(faces) < MIN_REGION_FACES and \
-                face_areas(V, F[faces]).sum() < SHARD_AREA * total:
+        elif not exact and len(faces) < MIN_REGION_FACES and small:
             for i in np.argsort(d).tolist():
                 if not explains(fits[nb[i]], tol):
                     continue

@@ -25,6 +25,7 @@ __all__ = [
     "fit_segments",
     "refit_segments",
     "normals_agree",
+    "mean_normal_agrees",
     "precheck_vertices",
     "rms_to",
     "explains",
@@ -218,6 +219,46 @@ def _faces_on_trimmed(V, F, faces, tol, start: Surface, refit, min_kept: int = 0
         return None
     on = corner_max_dev(V, F, faces, s) <= GROW_TOL * tol
     return None if A[~on].sum() > TRIM_SHARE * A.sum() else on
+
+
+def mean_normal_agrees(V, F, faces, s: Surface) -> bool:
+    """The faces' mean normal is within GROW_ANGLE of ``s``'s normals there.
+
+    Both means are area-weighted sums: of the faces' normals, and of ``s``'s normals at their
+    centroids. Noise tilts each face (at noise 0.2 edge lengths a fifth of the faces are over
+    GROW_ANGLE off, and :func:`normals_agree` fails on a few faces), not their sum.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    faces : (f,) int64
+    s : Surface
+        Analytic.
+
+    Returns
+    -------
+    bool
+        Either orientation agrees.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from igl_heatseg.mesh.geometry import face_normals
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]])
+    >>> F = np.array([[0, 1, 2], [1, 3, 2]])       # the second face tilted by 35 degrees
+    >>> z = Surface("plane", {"point": np.zeros(3), "normal": np.array([0.0, 0, -1])})
+    >>> mean_normal_agrees(V, F, np.arange(2), z), normals_agree(V, F, face_normals(V, F), [1], z)
+    (True, False)
+    """
+    P = V[F[faces]]
+    N = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])  # twice the area times the unit normal
+    S = s.normals(P.mean(axis=1)) * np.linalg.norm(N, axis=1)[:, None]
+    S *= np.where(np.einsum("ij,ij->i", S, N) < 0, -1.0, 1.0)[:, None]  # either orientation
+    n, m = N.sum(axis=0), S.sum(axis=0)
+    den = float(np.linalg.norm(n) * np.linalg.norm(m))
+    return bool(den > 0 and float(n @ m) / den >= math.cos(GROW_ANGLE))
 
 
 def normals_agree(V, F, FN, faces, s: Surface, raw: bool = False) -> bool:

@@ -578,9 +578,12 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
     the old primitive types."""
     n = V.shape[0]
     surfaces = None
+    # one exactness test for the refinement and the curves (0.17 s on a 36k-face part)
+    exact = exact_tessellation(V, F) if refine != "off" or fit_surfaces else None
     if refine != "off":  # split, merge and move
         t = time.perf_counter()
-        ref = refine_segmentation(V, F, labels1, vtol, normals_from=W, progress=progress)
+        ref = refine_segmentation(V, F, labels1, vtol, normals_from=W, progress=progress,
+                                  exact=exact)
         labels1, k1 = ref.labels, len(ref.surfaces)
         vlab1 = np.zeros(n, dtype=np.int64)
         vlab1[F.ravel()] = np.repeat(labels1, 3)
@@ -598,7 +601,7 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
     curves = None
     if surfaces is not None:
         t = time.perf_counter()
-        curves = boundary_curves(V, F, labels, surfaces, h, vtol)
+        curves = boundary_curves(V, F, labels, surfaces, h, vtol, exact=exact)
         timings["boundary_curves"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -223,7 +223,7 @@ def _taubin(P, closed: bool):
 
 
 def boundary_curves(V, F, labels, surfaces, mean_edge: float | None = None,
-                    tol: float | None = None) -> list:
+                    tol: float | None = None, exact: bool | None = None) -> list:
     """The trimming curve of every boundary chain of a segmentation.
 
     Parameters
@@ -241,6 +241,9 @@ def boundary_curves(V, F, labels, surfaces, mean_edge: float | None = None,
         Fit tolerance (model units; default
         :func:`~igl_heatseg.surfaces.tolerance.vertex_tolerance`): a chain is an intersection
         curve only where both surfaces fit the faces along it (:data:`FIT_SHARE`).
+    exact : bool, optional
+        Whether the mesh is an exact tessellation
+        (:func:`~igl_heatseg.surfaces.tolerance.exact_tessellation`, computed when omitted).
 
     Returns
     -------
@@ -271,7 +274,7 @@ def boundary_curves(V, F, labels, surfaces, mean_edge: float | None = None,
     graph = boundary_graph(V, F, labels, k, inner_kinks=False)
     on_tol = ON_SURFACE_REL * mean_edge
     tol = vertex_tolerance(V, F) if tol is None else float(tol)
-    exact = exact_tessellation(V, F)
+    exact = exact_tessellation(V, F) if exact is None else bool(exact)
     pins = np.array([s.is_analytic and not s.rms > TRUST_RMS * tol for s in surfaces], dtype=bool)
     pins &= np.bincount(labels, minlength=k) >= EVIDENCE_FACES
     on = np.zeros(len(F), dtype=bool)  # faces on their own segment's surface

@@ -622,6 +622,7 @@ def refine_segmentation(
     merge: bool = True,
     normals_from: np.ndarray | None = None,
     progress=None,
+    exact: bool | None = None,
 ) -> SurfaceSegmentation:
     """Fit a surface to every segment; split, merge and move boundaries by the fits.
 
@@ -644,6 +645,9 @@ def refine_segmentation(
         Positions the normals are taken from (a denoised copy of ``V``: noisy face normals
         mislead seeds and growth); distances are always measured on ``V``.
     progress : callable(stage, fraction), optional
+    exact : bool, optional
+        Whether the mesh is an exact tessellation
+        (:func:`~igl_heatseg.surfaces.tolerance.exact_tessellation`, computed when omitted).
 
     Returns
     -------
@@ -668,7 +672,7 @@ def refine_segmentation(
     FN = face_normals(V if W is None else W, F)
     labels = _face_connected(F, np.asarray(labels, dtype=np.int64), TT)
     tol = vertex_tolerance(V, F) if tol is None else float(tol)
-    exact = exact_tessellation(V, F)
+    exact = exact_tessellation(V, F) if exact is None else bool(exact)
     split_ratio = SPLIT_RMS_RATIO if exact else SPLIT_RMS_RATIO_NOISY
     timings["tolerance"] = time.perf_counter() - t0
 

@@ -156,8 +156,8 @@ SHARD_AREA = 5e-4
 #: normals) is within GROW_ANGLE of the surface's there, though its faces' own normals are not:
 #: at noise 0.2 a fifth of the faces' normals are over GROW_ANGLE off, so a shard of 3-7 faces
 #: on a narrow cylinder failed :func:`~.segment_fit.normals_agree` (tuning-3
-#: domed_cap_s6027_frontal_n0.2: three shards of truth's cylinder 3 at 0.29-0.44 tol from its
-#: segment's surface stayed segments). Held to tol, not GROW_TOL x tol: the corners of a
+#: domed_cap_s6027_frontal_n0.2: three shards of a narrow cylinder, 0.29-0.44 tol from its
+#: segment's surface, stayed segments). Held to tol, not GROW_TOL x tol: the corners of a
 #: chamfer one row of triangles wide all lie on its neighbours, and its mean normal, not its
 #: distance, keeps it.
 SHARD_ON_TOL = 1.0

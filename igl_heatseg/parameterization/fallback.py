@@ -44,6 +44,13 @@ log = logging.getLogger(__name__)
 #: SLIM iterations of the Tutte fallback's improvement.
 SLIM_ITERATIONS: int = 30
 
+#: Steps of iterative refinement of the Tutte solve (``x += solve(b - A x)``). A Tutte map
+#: collapses parts of a noisy chart to triangles of round-off size, so whether it certifies
+#: depends on the solver's last bits: on this machine (2026-12-01) the uniform-weight map of
+#: ``data/chart_mean_value_tutte_flips.npz`` flipped 11 triangles without refinement and none
+#: with it, where an earlier machine certified it unrefined.
+TUTTE_REFINE_STEPS: int = 3
+
 #: Local repair of a Hessian map with a few flips: rounds of growing the free region by one
 #: ring around the offending vertices (uniform-weight harmonic re-solve of the free region).
 REPAIR_ROUNDS: int = 4
@@ -143,8 +150,11 @@ def tutte_map(
         LII = L[inner][:, inner].tocsc()
         rhs = -(L[inner][:, bnd] @ UV[bnd])
         solve = spla.factorized(LII)
-        UV[inner, 0] = solve(rhs[:, 0])
-        UV[inner, 1] = solve(rhs[:, 1])
+        for c in range(2):  # refined: a collapsed region's triangles are round-off small
+            x = solve(rhs[:, c])
+            for _ in range(TUTTE_REFINE_STEPS):
+                x = x + solve(rhs[:, c] - LII @ x)
+            UV[inner, c] = x
         if weights == "mean_value" and not np.all(np.isfinite(UV)):
             return tutte_map(V, F, bnd, "uniform")
     return UV

@@ -436,8 +436,11 @@ def segment_robust(
     t = time.perf_counter()
     raw_phi = _dihedral(V, F, topo)
     noise_angle = float(np.median(raw_phi[topo.interior])) if topo.interior.any() else 0.0
+    exact = None  # exact_tessellation(V, F), once, where a stage needs it
     if denoise is None:
-        denoise = noise_angle > NOISE_FREE_ANGLE and not exact_tessellation(V, F)
+        if noise_angle > NOISE_FREE_ANGLE:
+            exact = exact_tessellation(V, F)
+        denoise = noise_angle > NOISE_FREE_ANGLE and not exact
         log.info("robust: median dihedral deviation %.2f deg", math.degrees(noise_angle))
     if denoise:
         W = denoise_vertices(V, F, bilateral_normals(V, F, sigma_r=sigma_r))
@@ -470,7 +473,7 @@ def segment_robust(
                  anisotropy=anisotropy, axis_angle=axis_angle,
                  flat_normal_angle=flat_normal_angle, crease_dilation=crease_dilation,
                  curvature_ring=curvature_ring, solver=solver, progress=progress),
-            merge, fit_surfaces, refine,
+            merge, fit_surfaces, refine, exact,
         )
     F2, orig = split_along_creases(F, sharp, topo)
     cls2, axis2 = curvature_classes(W[orig], F2, h, flat_curvature, anisotropy, curvature_ring)
@@ -532,7 +535,7 @@ def segment_robust(
         timings["merge"] = time.perf_counter() - t
     labels, vertex_labels, segment_areas, order, surfaces, curves, types, rms = _finish(
         V, F, W, N, h, labels1, hl1.vertex_labels, k1, refine, fit_surfaces, progress, timings,
-        vtol,
+        vtol, exact,
     )
 
     return RobustSegmentation(
@@ -572,14 +575,17 @@ def _fit_tolerance(V, F, merge, refine, fit_surfaces) -> float | None:
     return vertex_tolerance(V, F) if merge or refine != "off" or fit_surfaces else None
 
 
-def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings, vtol):
+def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, timings, vtol,
+            exact=None):
     """The common end of :func:`segment_robust`: refinement (``refine``: "full" or "off") or
     one fit per segment, the final numbering, the trimming curves between the fitted segments,
     the old primitive types."""
     n = V.shape[0]
     surfaces = None
-    # one exactness test for the refinement and the curves (0.17 s on a 36k-face part)
-    exact = exact_tessellation(V, F) if refine != "off" or fit_surfaces else None
+    # one exactness test for the denoising choice, the refinement and the curves (0.17 s on a
+    # 36k-face part); ``exact`` is the caller's when it made it
+    if exact is None and (refine != "off" or fit_surfaces):
+        exact = exact_tessellation(V, F)
     if refine != "off":  # split, merge and move
         t = time.perf_counter()
         ref = refine_segmentation(V, F, labels1, vtol, normals_from=W, progress=progress,
@@ -616,7 +622,8 @@ def _finish(V, F, W, N, h, labels1, vlab1, k1, refine, fit_surfaces, progress, t
     return labels, vertex_labels, segment_areas, order, surfaces, curves, types, np.asarray(rms)
 
 
-def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit_surfaces, refine):
+def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit_surfaces, refine,
+                    exact=None):
     """:func:`segment_robust` on the midpoint subdivision of the denoised surface ``W``, the
     labels brought back to ``mesh``'s faces (majority of the children, then face-connected)."""
     V, F = mesh.V, mesh.F
@@ -660,7 +667,7 @@ def _on_subdivision(mesh, W, levels, sharp, noise_angle, timings, kw, merge, fit
     N = face_normals(W, F)
     labels, vertex_labels, segment_areas, order, surfaces, curves, types, rms = _finish(
         V, F, W, N, h, labels1, fine.vertex_labels[:n], k1, refine, fit_surfaces,
-        kw["progress"], timings, vtol,
+        kw["progress"], timings, vtol, exact,
     )
     return RobustSegmentation(
         labels=labels,

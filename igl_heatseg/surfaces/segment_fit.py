@@ -252,9 +252,10 @@ def mean_normal_agrees(V, F, faces, s: Surface) -> bool:
     >>> mean_normal_agrees(V, F, np.arange(2), z), normals_agree(V, F, face_normals(V, F), [1], z)
     (True, False)
     """
-    P = V[F[faces]]
-    N = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])  # twice the area times the unit normal
-    S = s.normals(P.mean(axis=1)) * np.linalg.norm(N, axis=1)[:, None]
+    Fs = F[faces]
+    A = face_areas(V, Fs)[:, None]
+    N = face_normals(V, Fs) * A
+    S = s.normals(V[Fs].mean(axis=1)) * A
     S *= np.where(np.einsum("ij,ij->i", S, N) < 0, -1.0, 1.0)[:, None]  # either orientation
     n, m = N.sum(axis=0), S.sum(axis=0)
     den = float(np.linalg.norm(n) * np.linalg.norm(m))

@@ -257,6 +257,41 @@ def test_torus_ring():
     assert fid["volume"] == pytest.approx(2 * math.pi**2 * R * r**2, rel=1e-6)
 
 
+def _filleted_hub(n_around: int):
+    """Flange (radius 40, height 8) with a hub (radius 10, up to z 20) joined by a fillet of
+    radius 4 tangent to the flange's top and the hub's side: an exact tessellation with
+    ``n_around`` facets per circle; segments bottom, rim, top, fillet, hub side, hub top."""
+    R, h, rh, rf, H = 40.0, 8.0, 10.0, 4.0, 20.0
+    phi = np.linspace(-np.pi / 2, -np.pi, 7)  # the fillet's quarter, flange to hub
+    fillet = [(rh + rf + rf * np.cos(p), h + rf + rf * np.sin(p)) for p in phi]
+    prof = ([(0.0, 0.0), (R, 0.0), (R, h)] + fillet + [(rh, H), (0.0, H)])
+    V, F, labels = revolve(prof, [0, 1, 2] + [3] * 6 + [4, 5], n_around)
+    surfs = [Surface("plane", {"point": np.zeros(3), "normal": -Z}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": R}),
+             Surface("plane", {"point": h * Z, "normal": Z}),
+             Surface("torus", {"center": (h + rf) * Z, "axis": Z, "major_radius": rh + rf,
+                               "minor_radius": rf}),
+             Surface("cylinder", {"point": np.zeros(3), "axis": Z, "radius": rh}),
+             Surface("plane", {"point": H * Z, "normal": Z})]
+    return V, F, labels, surfs
+
+
+@pytest.mark.parametrize("n_around", [13, 19])
+def test_coarse_fillet_tangent_to_a_plane_is_a_torus_face(n_around):
+    # A coarse CAD export (fewer than MIN_EDGE_SAMPLES facets per circle): the fillet's loop on
+    # the flange's top is sampled between its vertices too, on the chords, and the tangent
+    # plane and torus cannot move those samples onto their circle. Read from the vertices,
+    # which lie on it, the loop is at constant v and the fillet a face of revolution; from
+    # every sample it was trimmed by ShapeFix and failed BRepCheck (faceted, or built only
+    # after rebuilds).
+    V, F, labels, surfs = _filleted_hub(n_around)
+    res = build_brep(V, F, labels, surfs)
+    fid = res.fidelity
+    assert [s["status"] for s in res.faces] == ["built"] * 6
+    assert fid["valid"] and fid["solids"] == 1 and fid["faces"] == 6
+    assert "GeomAbs_Torus" in face_types(res.shape)
+
+
 def test_capsule_hemisphere_cap_and_closed_sphere():
     R, H = 1.0, 1.5
     phi = np.linspace(0, np.pi / 2, 9)[1:-1]

@@ -177,8 +177,11 @@ def _revolved_plans(graph, surfaces, projs, seg_points, pos, vertices, ctx):
         lp = _loop_points(graph.loops[a], ctx)
         if not periodic.wraps_axis(s, lp):
             continue
-        plans[a] = periodic.revolved_plan(s, lp, seg_points(a),
-                                          REVOLVED_SEW_FRACTION * ctx["sew_tol"])
+        # an exact tessellation's vertices lie on its circles, its chords inside them: the
+        # points that subdivide a chord are no evidence of where the loop runs
+        plans[a] = periodic.revolved_plan(
+            s, lp if ctx["noisy"] else _loop_points(graph.loops[a], ctx, vertices_only=True),
+            seg_points(a), REVOLVED_SEW_FRACTION * ctx["sew_tol"])
     circles, done = {}, {}
     for root in plans:
         queue = [root]
@@ -233,14 +236,18 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
     return u0, plan is not None
 
 
-def _loop_points(loops, ctx):
-    """Per loop, the points of its one closed edge (walked like the loop), or None."""
+def _loop_points(loops, ctx, vertices_only: bool = False):
+    """Per loop, the points of its one closed edge (walked like the loop), or None; with
+    ``vertices_only``, only its samples at the chain's mesh vertices (not those subdividing
+    its chords)."""
     out = []
     for loop in loops:
         if len(loop) != 1:
             out.append(None)
             continue
         P = ctx["chain_points"][loop[0][0]]
+        if vertices_only:
+            P = P[ctx["chain_at_vertex"][loop[0][0]]]
         out.append(P if loop[0][1] else P[::-1])
     return out
 
@@ -693,8 +700,10 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     snap = V.copy()
     for v, X in pos.items():
         snap[v] = X
-    ctx["chain_points"] = [points.edge_points(ch, V, pos, projs, vertices, ctx, snap)
-                           for ch in graph.chains]
+    sampled = [points.edge_points(ch, V, pos, projs, vertices, ctx, snap)
+               for ch in graph.chains]
+    ctx["chain_points"] = [P for P, _ in sampled]
+    ctx["chain_at_vertex"] = [at for _, at in sampled]
     plans, wraps, circles = _revolved_plans(graph, surfaces, projs,
                                             lambda a: V[np.unique(F[seg_faces[a]])], pos,
                                             vertices, ctx)

@@ -131,8 +131,11 @@ def edge_points(chain, V, pos, projs, vertices, ctx, snap) -> np.ndarray:
 
     Returns
     -------
-    (q, 3) float64
+    P : (q, 3) float64
         The samples, at least MIN_EDGE_SAMPLES + 1 of them, in chain order.
+    at_vertex : (q,) bool
+        True at the samples that are the chain's mesh vertices (the others subdivide its
+        chords; a restarted closed chain's first and last sample is where it crosses the seam).
     """
     sides = (chain.left, chain.right)
     ps = [projs[s] for s in sides if s >= 0 and projs[s] is not None]
@@ -156,12 +159,15 @@ def edge_points(chain, V, pos, projs, vertices, ctx, snap) -> np.ndarray:
     if between:
         ctx["between"].update(s for s in sides if s >= 0)
     P = P.copy()
+    at_vertex = np.zeros(len(P), dtype=bool)
+    at_vertex[orig] = True
     if not restarted:
         snap[chain.verts] = P[orig]
     else:
         P[-1] = P[0]
+        at_vertex[[0, -1]] = False  # (the seam crossing, on a chord)
         move_vertex(a, P[0], pos, vertices, ctx)
-    return P
+    return P, at_vertex
 
 
 def move_vertex(vid, X, pos, vertices, ctx) -> None:

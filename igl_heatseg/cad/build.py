@@ -109,7 +109,11 @@ SEW_MAX_EDGE = 0.5
 #: the same rebuilds facet the built segments along the free edges of a closed mesh's shell
 #: (when that does not give a valid solid, the first open shell is written). A build that
 #: leaves out faceted triangles sewing closed up (:func:`~.blame.collapsed`) is one more.
-MAX_REBUILDS = 2
+#: Faceting a face can leave a neighbour invalid in turn: with 2, tuning
+#: flange_s1025_coarse_n0.05 and tuning-3 bolt_s6029_frontal_n0.05 came out wholly faceted
+#: (19 of 19 and 15 of 15 segments); with 4, valid solids with 9 and 3 faceted, in the same
+#: time (the whole model's fallback had run every later build of :func:`build_brep` too).
+MAX_REBUILDS = 4
 #: Builds more (besides MAX_REBUILDS) with the edge points next to segments whose sewn faces
 #: failed BRepCheck or kept free edges put back on the mesh
 #: (:func:`~.geometry.settle_on_surfaces`), before those segments are faceted.

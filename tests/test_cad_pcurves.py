@@ -89,3 +89,37 @@ def test_exact_pcurves_are_left_alone(make):
         while ex.More():
             assert pcurve_deviation(TopoDS.Edge(ex.Current()), face) < 1e-6
             ex.Next()
+
+
+def test_a_wild_bspline_pcurve_on_a_plane_is_projected_again():
+    # UnifySameDomain joined merged edges' pcurves on a plane into one B-spline of degree 11
+    # whose poles ran out to 1e12 (a coarse noisy countersunk plate's solid: volume 3e24).
+    # Pcurves on planes were not checked; a B-spline one is now (lines and circles are exact).
+    solid = BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape()
+    cap = next(f for f in faces_of(solid) if abs(face_area(f) - math.pi) < 1e-9
+               and _volume_z(f) < 1e-9)
+    ex = TopExp_Explorer(cap, TopAbs_EDGE)
+    edge = TopoDS.Edge(ex.Current())
+    a, b = BRep_Tool.Range_s(edge, cap)
+    old = BRep_Tool.CurveOnSurface_s(edge, cap, 0.0, 0.0)
+    T = np.linspace(a, b, 200)
+    UV = np.array([[old.Value(float(t)).X(), old.Value(float(t)).Y()] for t in T])
+    spike = 1.0 + 3.0 * np.exp(-(((T - 0.5 * (a + b)) / 0.2) ** 2))  # out to 4 radii
+    tol = BRep_Tool.Tolerance_s(edge)
+    BRep_Builder().UpdateEdge(edge, pcurve_through(UV * spike[:, None], T), cap, tol)
+    assert pcurve_deviation(edge, cap) > 2.9
+    assert not abs(_volume(solid) - 2 * math.pi) < 0.1
+
+    assert mend_pcurves(solid) == (1, 0)
+    assert pcurve_deviation(edge, cap, 1000) <= max(tol, 1e-6)
+    assert face_area(cap) == pytest.approx(math.pi, rel=1e-6)
+    assert _volume(solid) == pytest.approx(2 * math.pi, rel=1e-6)
+    assert shape_valid(solid)
+    assert mend_pcurves(solid) == (0, 0)
+
+
+def _volume_z(face) -> float:
+    """Height of a planar face's centre of mass."""
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    return props.CentreOfMass().Z()

@@ -8,9 +8,11 @@ elbow). BRepCheck samples too few points to see it, but the face's parametric do
 wrong: its area came out 1,018 instead of 1,615 mm^2, the solid's volume 13.8 % short, and the
 face was left out of fine tessellations, in OCC and in any CAD program reading the STEP file.
 
-:func:`mend_pcurves` samples every pcurve of every curved face against its edge's 3D curve,
-and replaces one that strays by the projection of the 3D curve's points onto the surface,
-interpolated at the same parameters (same-parameter by construction).
+:func:`mend_pcurves` samples every pcurve of every curved face (and every B-spline pcurve on
+a plane: UnifySameDomain's joined pcurves can ring too) against its edge's 3D curve, and
+replaces one that strays by the projection of the 3D curve's points onto the surface,
+interpolated at the same parameters (same-parameter by construction). The sewing mends after
+sewing and again after unifying faces.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ require_ocp()
 from OCP.BRep import BRep_Builder, BRep_Tool  # noqa: E402
 from OCP.BRepAdaptor import BRepAdaptor_Surface  # noqa: E402
 from OCP.collections import Array1_double, Array1_gp_Pnt2d  # noqa: E402
+from OCP.Geom2d import Geom2d_BSplineCurve  # noqa: E402
 from OCP.Geom2dAPI import Geom2dAPI_PointsToBSpline  # noqa: E402
 from OCP.GeomAbs import GeomAbs_Plane, GeomAbs_Shape  # noqa: E402
 from OCP.gp import gp_Pnt2d  # noqa: E402
@@ -135,6 +138,12 @@ def pcurve_through(UV: np.ndarray, T: np.ndarray):
     return curve
 
 
+def _bspline_pcurve(edge, face) -> bool:
+    """Whether the edge's pcurve on the face is a B-spline curve."""
+    pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+    return pcurve is not None and isinstance(pcurve, Geom2d_BSplineCurve)
+
+
 def _projected(edge, face):
     """A pcurve of ``edge`` on ``face`` through the projections of its 3D curve's points, at
     their parameters, on the same sheet of a periodic surface as the old pcurve's start; None
@@ -165,9 +174,11 @@ def _projected(edge, face):
 
 
 def mend_pcurves(shape, min_stray: float = 0.0) -> tuple[int, int]:
-    """Replace, in place, the pcurves of curved faces that stray from their edge.
+    """Replace, in place, the pcurves that stray from their edge.
 
-    Every edge of every face that is not a plane (pcurves on planes are exact projections) is
+    Every edge of every face that is not a plane, and every B-spline pcurve on a plane (the
+    others there are exact projections: lines and circles; UnifySameDomain joined the pcurves
+    of merged edges on a plane into one of degree 11 with 282 poles, out to 1e12), is
     compared with :func:`pcurve_deviation`; one farther than :data:`STRAY_FACTOR` times its
     tolerance and than ``min_stray`` gets :func:`_projected`'s pcurve when that one is
     closer, and its tolerance is raised to what is left. Seam edges (two pcurves on one
@@ -196,13 +207,12 @@ def mend_pcurves(shape, min_stray: float = 0.0) -> tuple[int, int]:
     while faces.More():
         face = TopoDS.Face(faces.Current())
         faces.Next()
-        if BRepAdaptor_Surface(face, False).GetType() == GeomAbs_Plane:
-            continue
+        plane = BRepAdaptor_Surface(face, False).GetType() == GeomAbs_Plane
         edges = TopExp_Explorer(face, TopAbs_EDGE)
         while edges.More():
             edge = TopoDS.Edge(edges.Current())
             edges.Next()
-            if BRep_Tool.IsClosed_s(edge, face):
+            if BRep_Tool.IsClosed_s(edge, face) or (plane and not _bspline_pcurve(edge, face)):
                 continue
             tol = BRep_Tool.Tolerance_s(edge)
             worst = pcurve_deviation(edge, face)

@@ -263,11 +263,22 @@ def _sew(faces, tol: float, unify: bool):
     fix.SetPrecision(tol * 1e-2)
     fix.SetMaxTolerance(tol)
     fix.Perform()
-    mended, left = mend_pcurves(fix.Shape(), tol)  # sewing's pcurves can stray (pcurves.py)
+    _mend(fix.Shape(), tol, "sewing")  # sewing's pcurves can stray (pcurves.py)
+    if not unify:
+        return fix.Shape(), None
+    shape, valid = _unify(fix.Shape())
+    if not shape.IsSame(fix.Shape()) and _mend(shape, tol, "unifying faces"):
+        valid = None  # (checked before the pcurves were mended)
+    return shape, valid
+
+
+def _mend(shape, tol: float, what: str) -> int:
+    """:func:`~.pcurves.mend_pcurves` of a sewn or unified shape, logged; pcurves replaced."""
+    mended, left = mend_pcurves(shape, tol)
     if mended or left:
-        logger.info("sewing left %d pcurve(s) off their edges: %d projected again",
+        logger.info("%s left %d pcurve(s) off their edges: %d projected again", what,
                     mended + left, mended)
-    return _unify(fix.Shape()) if unify else (fix.Shape(), None)
+    return mended
 
 
 def assemble(faces: list, sew_tol: float, closed: bool, unify: bool = True,

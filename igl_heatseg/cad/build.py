@@ -99,6 +99,9 @@ FACET_GAP_FACTOR = 1.5
 #: fraction of the sewing tolerance of their mean-v circle: those circles then replace the
 #: loop edges, and sewing must close the gap (between two such neighbours, twice this).
 REVOLVED_SEW_FRACTION = 0.45
+#: ... read at the loop's mesh vertices alone on an exact tessellation when it has this many
+#: (fewer leave too little of the turn around the axis: 4 of a square hole span 270 degrees).
+LOOP_MIN_VERTICES = 6
 
 #: Widest sewing tolerance tried when a closed part keeps free edges, in mean edge lengths
 #: (wider would merge distinct mesh vertices).
@@ -243,15 +246,16 @@ def _plan_circles(a, s, plan, graph, circles, pos, vertices, ctx):
 def _loop_points(loops, ctx, vertices_only: bool = False):
     """Per loop, the points of its one closed edge (walked like the loop), or None; with
     ``vertices_only``, only its samples at the chain's mesh vertices (not those subdividing
-    its chords)."""
+    its chords) when it has LOOP_MIN_VERTICES of them."""
     out = []
     for loop in loops:
         if len(loop) != 1:
             out.append(None)
             continue
         P = ctx["chain_points"][loop[0][0]]
-        if vertices_only:
-            P = P[ctx["chain_at_vertex"][loop[0][0]]]
+        at = ctx["chain_at_vertex"][loop[0][0]]
+        if vertices_only and at.sum() >= LOOP_MIN_VERTICES:
+            P = P[at]
         out.append(P if loop[0][1] else P[::-1])
     return out
 

@@ -105,7 +105,7 @@ def _seam_polyline(chain, V, projs, ctx):
     return None
 
 
-def edge_points(chain, V, pos, projs, vertices, ctx, snap) -> np.ndarray:
+def edge_points(chain, V, pos, projs, vertices, ctx, snap) -> tuple[np.ndarray, np.ndarray]:
     """Samples along a chain moved onto its surfaces (a closed chain restarted on a seam).
 
     Kept in ``ctx["point_cache"]`` by the chain, its ends' positions, its sides' surfaces, how

@@ -292,7 +292,6 @@ def test_coarse_fillet_tangent_to_a_plane_is_a_torus_face(n_around):
     assert "GeomAbs_Torus" in face_types(res.shape)
 
 
-
 def _surfaces_from_dicts(items):
     """Surfaces from their ``Surface.to_dict`` descriptions."""
     out = []
@@ -319,6 +318,7 @@ def test_a_cascade_of_invalid_faces_leaves_most_faces_built(data_dir):
     assert not res.faceted_model and faceted <= 10, (faceted, res.message)
     assert res.fidelity["valid"] and res.fidelity["solids"] == 1
     assert res.fidelity["free_edges"] == 0
+
 
 def test_capsule_hemisphere_cap_and_closed_sphere():
     R, H = 1.0, 1.5

@@ -320,6 +320,40 @@ def test_a_cascade_of_invalid_faces_leaves_most_faces_built(data_dir):
     assert res.fidelity["free_edges"] == 0
 
 
+def test_a_boss_on_a_cylinder_keeps_its_saddle_edge_through_sewing(data_dir):
+    # A clean irregular saddle boss (3,284 faces, 17 segments). The boss's saddle loop, one
+    # closed edge, was restarted on the boss's seam at a point interpolated by angle along a
+    # chord: 1e-4 rad off the seam. ShapeFix_Face then cut the edge next to its vertex, and
+    # sewing lost the sliver: free edges, and the boss and the body cylinders faceted.
+    d = np.load(data_dir / "cad_saddle_seam.npz")
+    surfs = _surfaces_from_dicts(json.loads(str(d["surfaces"])))
+    res = build_brep(d["V"], d["F"].astype(np.int64), d["labels"].astype(np.int64), surfs)
+    assert [f["index"] for f in res.faces if f["status"] != "built"] == [], res.message
+    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
+    assert res.fidelity["free_edges"] == 0
+
+
+def test_a_closed_chain_restarts_exactly_on_the_seam_plane():
+    from igl_heatseg.cad.geometry import start_at_seam
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        # a saddle loop: a boss of radius r about z on a body of radius R about x, sampled
+        # coarsely (chords spanning up to 0.3 rad) and from a random start
+        r, R = rng.uniform(2, 6), rng.uniform(8, 20)
+        t = np.sort(rng.uniform(0, 2 * np.pi, 30))
+        t = np.r_[t, t[0]]
+        P = np.c_[r * np.cos(t), r * np.sin(t), np.sqrt(R ** 2 - (r * np.sin(t)) ** 2)]
+        o, a = rng.normal(0, 0.01, 3), np.array([0.0, 0.0, 1.0])
+        u0 = rng.uniform(0, 2 * np.pi)
+        x = np.array([np.cos(u0), np.sin(u0), 0.0])
+        Q = start_at_seam(P, (o, a, x))
+        assert Q is not None and np.allclose(Q[0], Q[-1]) and len(Q) == len(P) + 1
+        q = Q[0] - o
+        assert abs(q @ np.cross(a, x)) <= 1e-12 * R  # on the seam's plane
+        assert q @ x > 0  # on its half (the seam, not the opposite line)
+
+
 def test_capsule_hemisphere_cap_and_closed_sphere():
     R, H = 1.0, 1.5
     phi = np.linspace(0, np.pi / 2, 9)[1:-1]

@@ -148,7 +148,11 @@ def start_at_seam(P: np.ndarray, frame):
     if len(hit) != 1:
         return None
     i = int(hit[0])
-    t = -th[i] / d[i]
+    # where the chord meets the seam's plane (interpolating the angle instead puts the point
+    # off the seam by the chord's curvature: 1e-4 rad on a boss's saddle loop, and ShapeFix
+    # then splits the closed edge into a sliver next to its vertex)
+    s0, s1 = (P[i] - o) @ y, (P[i + 1] - o) @ y
+    t = s0 / (s0 - s1)
     Q = P[i] + t * (P[i + 1] - P[i])
     return np.vstack([Q, P[i + 1:-1], P[:i + 1], Q])
 

@@ -901,6 +901,18 @@ def test_face_read_back_out_of_place_is_named_by_its_vertices():
     assert len(out) == 1 and out[0].IsSame(top)
 
 
+def test_a_disk_is_its_own_origin_though_a_thin_band_has_its_vertex_too():
+    # A cone band 0.1 high on a disk of radius 10, as a knob's bottom chamfer: the disk's one
+    # vertex is the band's too. The read-back disk was taken for the band (a tie in shared
+    # vertices), 35 times its area: the band was named out of place (f29 knob_s29019_irregular_n0
+    # faceted its chamfer for it).
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCone
+
+    from igl_heatseg.cad.roundtrip import invalid_faces
+
+    assert invalid_faces(BRepPrimAPI_MakeCone(10.0, 9.9, 0.1).Shape()) == []
+
+
 def test_sliver_shell_split_off_by_the_reader_names_its_face():
     from OCP.BRep import BRep_Builder
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon

@@ -1675,6 +1675,10 @@ def test_a_segment_faceted_at_its_trim_lends_its_neighbours_no_surface(monkeypat
     P = V[F]
     volume = np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum() / 6
     assert res.fidelity["volume"] == pytest.approx(volume, rel=0.01)
+    # past the time limit that build is not started, and the report says so
+    late = build_brep(V, F, labels, surfs, time_limit=0.0)
+    assert "the build without the surfaces of segments [1] (faceted at their trim)" in \
+        late.time_limit["skipped"]
 
 
 def test_two_corners_moved_onto_one_point_stay_at_the_mesh():

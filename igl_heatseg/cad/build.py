@@ -767,7 +767,9 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
     # 2 % of its volume): built again without it, as a segment faceted after sewing
     trimmed = {a: st["reason"] for a, st in enumerate(status)
                if st["status"] == "faceted" and projs[a] is not None and a not in skip}
-    if trimmed:
+    if trimmed and not ctx["limit"].out_of_time(
+            f"the build without the surfaces of segments {sorted(trimmed)} (faceted at their "
+            "trim)"):
         logger.info("segments %s faceted at their trim; building their neighbours again "
                     "without their surfaces", sorted(trimmed))
         skip.update(trimmed)

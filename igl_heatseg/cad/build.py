@@ -7,9 +7,9 @@ charts; deviation check, a B-spline over the chart of an analytic segment that d
 or B-spline curves -- the chain's polyline where a spline would ring off it -- each edge
 built once and shared by its two faces; two corners of one chain never share a point),
 ``faces`` (trimmed faces, ``ShapeFix_Face`` for pcurves and seams, per-face checks; failures
-become faceted patches), ``sew`` (sewing, shape fix, same-domain unification, solid),
-``check`` (BRepCheck in memory and after a STEP round trip, for every sewn model) and
-``fidelity``.
+become faceted patches, and their neighbours are built again without their surfaces),
+``sew`` (sewing, shape fix, same-domain unification, solid), ``check`` (BRepCheck in memory
+and after a STEP round trip, for every sewn model) and ``fidelity``.
 """
 
 from __future__ import annotations

@@ -321,6 +321,39 @@ def test_merging_finds_each_segments_measured_vertices_once(monkeypatch):
     assert plain[2] == cached[2]
 
 
+def test_a_merge_measured_on_a_segment_before_it_grew_is_not_made():
+    """A plane (0), one sliver triangle at its crease (1) and a chamfer 20 degrees up from it
+    (2). The plane explains the sliver (its far corner 0.0036 off, within tol); the chamfer's
+    plane holds the sliver exactly and is taken first, the sliver's segment then holding the
+    chamfer. The plane's pending union with the sliver was measured on the sliver alone: made
+    anyway, it put the chamfer into the plane (tuning countersunk_plate_s1039's bottom
+    chamfer). The union is measured again, and refused."""
+    from igl_heatseg.surfaces import merge
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    xs = np.r_[np.arange(11.0), 10.01, 10.5, 11.0 + np.arange(3) * 0.5]
+    ys = np.arange(11.0)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    V = np.c_[X.ravel(), Y.ravel(), np.tan(np.radians(20)) * np.maximum(X.ravel() - 10, 0)]
+    nx, ny = len(xs), len(ys)
+    F = []
+    for i in range(nx - 1):
+        for j in range(ny - 1):
+            a, b, c, d = i * ny + j, (i + 1) * ny + j, (i + 1) * ny + j + 1, i * ny + j + 1
+            F += [[a, b, c], [a, c, d]]
+    F = np.array(F)
+    x = V[F, 0]
+    labels = np.where(x.max(axis=1) <= 10, 0, 2).astype(np.int64)
+    sliver = np.flatnonzero((x.min(axis=1) == 10) & ((x == 10).sum(axis=1) == 2))[4]
+    labels[sliver] = 1
+    tol = 0.01
+    fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol) for k in range(3)}
+    assert merge.rms_to(V, F, np.array([sliver]), fits[0]) <= tol  # the plane explains it
+    merge.merge_segments(V, F, labels, tol, fits)
+    assert len(np.unique(labels)) == 2 and (labels[x.max(axis=1) <= 10] == 0).all()
+    assert (labels[x.max(axis=1) > 10] != 0).all() and labels[sliver] != 0
+
+
 def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     # one triangle of a noisy plane, at a vertex that stands off it (a noise spike), is a
     # segment of its own: off the plane by more than growth allows, and fitted exactly by its

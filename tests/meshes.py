@@ -1,13 +1,10 @@
-"""Analytic test meshes (numpy, and libigl for subdivision), consistently oriented, outward
-normals."""
+"""Analytic test meshes (numpy only), consistently oriented, outward normals."""
 
 from __future__ import annotations
 
-import igl
 import numpy as np
 
 from igl_heatseg.mesh.checks import validate_mesh
-from igl_heatseg.surfaces.model import Surface
 
 
 def grid(nx: int, ny: int, sx: float = 1.0, sy: float = 1.0):
@@ -219,26 +216,3 @@ def rounded_box(a: float = 2.0, r: float = 1.0, n: int = 12, noise: float = 0.0,
     kind = (np.abs(C) > a + 1e-9).sum(axis=1) - 1
     V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
     return V, F, kind, np.sign(C)
-
-
-CUBE_V = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-
-
-def noisy_box(levels=3, noise=0.02, seed=0):
-    """The cube [-1, 1]^3 subdivided ``levels`` times, vertices moved along their normals; the
-    side of each face (0..5) and the six exact planes."""
-    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    V, F = igl.upsample(CUBE_V, F, levels)
-    N = igl.per_vertex_normals(V, F)
-    W = V + np.random.default_rng(seed).normal(0, noise, len(V))[:, None] * N
-    FN = igl.per_face_normals(V, F, np.zeros(3))
-    axis = np.abs(FN).argmax(axis=1)
-    side = 2 * axis + (FN[np.arange(len(F)), axis] > 0)
-    planes = []
-    for k in range(6):
-        n = np.zeros(3)
-        n[k // 2] = 1.0 if k % 2 else -1.0
-        planes.append(Surface("plane", {"point": n.copy(), "normal": n}, rms=noise,
-                              max_dev=4 * noise))
-    return W, F.astype(np.int64), side.astype(np.int64), planes

@@ -2211,10 +2211,18 @@ def test_a_noisy_cube_is_built_on_its_planes_when_its_denoised_vertices_are_with
     denoised positions (here the clean cube's) within tol, every side is its plane and the
     volume is exact. A face of one side dragged off its plane in the denoised positions too
     still makes that side a stand-in."""
-    from meshes import noisy_box
+    from meshes import cube
 
-    V, F, labels, planes = noisy_box(3, noise=0.0)
-    Vn = noisy_box(3, noise=0.02, seed=seed)[0]
+    V, F = cube(6)
+    C = V[F].mean(axis=1)
+    ax = np.abs(C).argmax(axis=1)
+    labels = 2 * ax + (C[np.arange(len(C)), ax] > 0)
+    planes = []
+    for k in range(6):
+        n = np.zeros(3)
+        n[k // 2] = 1.0 if k % 2 else -1.0
+        planes.append(Surface("plane", {"point": n.copy(), "normal": n}))
+    Vn = V + np.random.default_rng(seed).normal(scale=0.02, size=V.shape)
     raw = build_brep(Vn, F, labels, planes, tol=0.05).to_report()["faces"]
     assert "bspline" in [f["built_as"] for f in raw]
     res = build_brep(Vn, F, labels, planes, tol=0.05, smooth=V)

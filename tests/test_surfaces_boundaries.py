@@ -3,13 +3,36 @@ else the smoothed mesh chain; never onto a surface that does not fit the faces a
 
 from __future__ import annotations
 
+import igl
 import numpy as np
 import pytest
-from meshes import noisy_box, plane_into_cylinder
+from meshes import plane_into_cylinder
 
 from igl_heatseg.mesh.topology import boundary_graph
 from igl_heatseg.surfaces.boundaries import boundary_curves, move_limit, onto_surfaces
 from igl_heatseg.surfaces.model import Surface
+
+CUBE_V = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+
+
+def noisy_box(levels=3, noise=0.02, seed=0):
+    """The cube [-1, 1]^3 subdivided ``levels`` times, vertices moved along their normals; the
+    side of each face (0..5) and the six exact planes."""
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    V, F = igl.upsample(CUBE_V, F, levels)
+    N = igl.per_vertex_normals(V, F)
+    W = V + np.random.default_rng(seed).normal(0, noise, len(V))[:, None] * N
+    FN = igl.per_face_normals(V, F, np.zeros(3))
+    axis = np.abs(FN).argmax(axis=1)
+    side = 2 * axis + (FN[np.arange(len(F)), axis] > 0)
+    planes = []
+    for k in range(6):
+        n = np.zeros(3)
+        n[k // 2] = 1.0 if k % 2 else -1.0
+        planes.append(Surface("plane", {"point": n.copy(), "normal": n}, rms=noise,
+                              max_dev=4 * noise))
+    return W, F.astype(np.int64), side.astype(np.int64), planes
 
 
 def test_onto_surfaces_finds_the_line_of_two_planes_and_the_point_of_three():

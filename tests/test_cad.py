@@ -2202,37 +2202,3 @@ def test_bspline_projector_finds_the_nearest_point_with_its_sign():
     for q, dq in zip(P[::30], d[::30], strict=True):
         ref.Perform(gp_Pnt(*map(float, q)))
         assert abs(ref.LowerDistance() - abs(dq)) < 1e-9
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_a_noisy_cube_is_built_on_its_planes_when_its_denoised_vertices_are_within_tol(seed):
-    """Noise of 0.4 tol on a cube puts a few vertices of most sides more than tol off their
-    planes: those sides become B-spline stand-ins (the volume 0.3-0.4 % off). With the
-    denoised positions (here the clean cube's) within tol, every side is its plane and the
-    volume is exact. A face of one side dragged off its plane in the denoised positions too
-    still makes that side a stand-in."""
-    from meshes import cube
-
-    V, F = cube(6)
-    C = V[F].mean(axis=1)
-    ax = np.abs(C).argmax(axis=1)
-    labels = 2 * ax + (C[np.arange(len(C)), ax] > 0)
-    planes = []
-    for k in range(6):
-        n = np.zeros(3)
-        n[k // 2] = 1.0 if k % 2 else -1.0
-        planes.append(Surface("plane", {"point": n.copy(), "normal": n}))
-    Vn = V + np.random.default_rng(seed).normal(scale=0.02, size=V.shape)
-    raw = build_brep(Vn, F, labels, planes, tol=0.05).to_report()["faces"]
-    assert "bspline" in [f["built_as"] for f in raw]
-    res = build_brep(Vn, F, labels, planes, tol=0.05, smooth=V)
-    assert [f["built_as"] for f in res.to_report()["faces"]] == ["plane"] * 6
-    assert res.fidelity["valid"] and res.fidelity["solids"] == 1
-    assert res.fidelity["volume"] == pytest.approx(8.0, rel=1e-6)
-    inner = np.unique(F[labels == 5])  # +z side's inner vertices, lifted in both copies
-    inner = inner[np.abs(V[inner, :2]).max(axis=1) < 0.9][:1]
-    Vn[inner, 2] += 0.2
-    W = V.copy()
-    W[inner, 2] += 0.2
-    got = build_brep(Vn, F, labels, planes, tol=0.05, smooth=W).to_report()["faces"]
-    assert got[5]["built_as"] != "plane"

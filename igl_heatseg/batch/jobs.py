@@ -316,7 +316,7 @@ def write_cad(out, mesh, seg, charts=None, *, tol=None, pictures=True, progress=
     t_fit = time.perf_counter() - t
     uv = chart_uvs(seg.labels, surfaces, charts) if charts is not None else None
     res = build_brep(mesh.V, mesh.F, seg.labels, surfaces, uv=uv, tol=tol, progress=progress,
-                     time_limit=time_limit, smooth=getattr(seg, "denoised_V", None))
+                     time_limit=time_limit)
     t = time.perf_counter()
     write_step(res.shape, out / "model.step", unit="mm")
     cad = res.to_report()

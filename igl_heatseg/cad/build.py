@@ -367,7 +367,7 @@ def _faceted_result(V, F, ctx, closed, timings, message):
 
 
 def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
-               time_limit=None, smooth=None) -> CadResult:
+               time_limit=None) -> CadResult:
     """Sewn B-Rep of a segmented mesh with one fitted surface per segment.
 
     Parameters
@@ -394,10 +394,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
         part-by-part build (the one running is finished, so the build can take longer). A
         model still invalid then is written faceted, a valid open shell kept as it is; the
         result's ``message`` and ``time_limit`` say what was skipped. None: no limit.
-    smooth : (n, 3) float64, optional
-        Denoised vertex positions (robust mode's ``denoised_V``): a segment within ``tol`` of
-        its analytic surface there is built on it, however far its noisy vertices
-        (:func:`~igl_heatseg.cad.surface_choice.surface_for`). Ignored unless shaped like ``V``.
 
     Returns
     -------
@@ -446,8 +442,6 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
     limit = ctx["limit"] = TimeLimit(time_limit)
     ctx["builder"], ctx["vtols"], ctx["fitted"] = BRep_Builder(), {}, surfaces
     ctx["mesh"] = V, F
-    ctx["smooth"] = None if smooth is None or np.shape(smooth) != V.shape else \
-        np.asarray(smooth, dtype=np.float64)
     closed = bool(edge_topology(F).interior.all())  # every edge has two faces
     ctx["notes"] = {}
     ctx["misfit_rms"] = max(MISFIT_RMS_RATIO * typical_rms(V, F, labels, surfaces),
@@ -459,8 +453,7 @@ def build_brep(V, F, labels, surfaces, uv=None, tol=None, progress=None,
     cache = ctx["surface_cache"] = {}  # (segment, B-splines allowed) -> its surface_for
     t = time.perf_counter()
     given, moved, touched = surface_choice.settle(V, F, labels, surfaces, uv, ctx["tol"],
-                                                  ctx["misfit_rms"], cache, ctx["notes"],
-                                                  ctx["smooth"])
+                                                  ctx["misfit_rms"], cache, ctx["notes"])
     timings["surfaces"] = time.perf_counter() - t  # (the stand-ins fitted there are kept)
     shape, status, sew_tol, faceted_model, message, solid = _sewn_model(
         V, F, given, surfaces, uv, ctx, closed, timings, progress)
@@ -685,8 +678,7 @@ def _build_faces(V, F, labels, surfaces, uv, ctx, timings, progress, skip=None, 
             try:
                 cache[key] = surface_choice.surface_for(a, s, V, F, seg_faces[a], uv, ctx["tol"],
                                         bspline=ctx.get("bspline", True),
-                                        misfit=ctx["misfit_rms"], notes=ctx["notes"],
-                                        smooth=ctx["smooth"])
+                                        misfit=ctx["misfit_rms"], notes=ctx["notes"])
             except Exception as exc:  # libigl, numpy and OCC (Standard_Failure) errors
                 # one segment's fit failing facets that segment, not the whole model
                 logger.warning("segment %d: surface not built (%s)", a, exc)

@@ -28,12 +28,10 @@ def _segment(V, F, faces):
     return verts, Fl.reshape(-1, 3)
 
 
-def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes=None,
-                smooth=None):
+def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes=None):
     """The OCC surface to build segment ``a``'s face on, or why there is none.
 
-    An analytic surface farther than ``tol`` from the segment (from its vertices, and from their
-    denoised positions ``smooth`` when given), or whose vertex RMS distance is
+    An analytic surface farther than ``tol`` from the segment, or whose vertex RMS distance is
     above ``misfit``, is replaced, when ``bspline``, by a B-spline fitted over the segment's
     chart (:func:`~igl_heatseg.cad.freeform.segment_chart`); in the second case only when the
     B-spline is the closer of the two. ``notes[a]`` then says why (for the report). A
@@ -63,13 +61,6 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
         B-spline.
     notes : dict or None, optional
         Filled with ``notes[a]``: why a B-spline replaced the analytic surface.
-    smooth : (n, 3) float64, optional
-        Denoised vertex positions (robust mode's). An analytic surface within ``tol`` of the
-        segment's denoised vertices is within tolerance however far the noisy ones are: on a
-        scan at noise 0.2 edge lengths the largest of a thousand vertex deviations is about
-        the modelling tolerance, while a border face of a neighbour stays off the surface
-        when denoised too (tuning rounded_box_s1033_frontal_n0.2: six segments faceted with
-        their vertices 1.06-1.23 tol off their surfaces, 0.28-0.83 tol denoised).
 
     Returns
     -------
@@ -98,8 +89,7 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
     if s.is_analytic:
         d = np.abs(s.distance(V[verts]))
         dev, rms = float(d.max()), float(np.sqrt(np.mean(d**2)))
-        within = dev <= tol or (smooth is not None and
-                                float(np.abs(s.distance(smooth[verts])).max()) <= tol)
+        within = dev <= tol
         try:
             UV = freeform.segment_chart(s, V[verts], Fl) if bspline and (
                 not within or rms > misfit) else None
@@ -144,7 +134,7 @@ def surface_for(a, s, V, F, faces, uv, tol, bspline=True, misfit=math.inf, notes
     return geom, geometry.Projector(None, geom), err, None
 
 
-def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None, smooth=None):
+def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None):
     """Labels with the border faces moved (:func:`~igl_heatseg.cad.segments.settle_borders`)
     of the analytic segments that would be faceted for their distance to their surface, to
     neighbours within ``tol`` of their analytic surface.
@@ -171,7 +161,7 @@ def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None, smooth=No
     cache : dict
         ``(segment, bspline allowed) -> surface_for(...)``; the entries of the segments that
         gave or took faces are dropped.
-    notes, smooth : optional
+    notes : dict or None, optional
         As for :func:`surface_for`.
 
     Returns
@@ -203,15 +193,13 @@ def settle(V, F, labels, surfaces, uv, tol, misfit, cache, notes=None, smooth=No
         if not s.is_analytic:
             continue
         faces = np.flatnonzero(labels == a)
-        verts = np.unique(F[faces])
-        if np.abs(s.distance(V[verts])).max(initial=0.0) <= tol or (
-                smooth is not None and np.abs(s.distance(smooth[verts])).max() <= tol):
+        if np.abs(s.distance(V[np.unique(F[faces])])).max(initial=0.0) <= tol:
             takers.add(a)
             continue
         if (a, True) not in cache:
             try:
                 cache[(a, True)] = surface_for(a, s, V, F, faces, uv, tol, misfit=misfit,
-                                               notes=notes, smooth=smooth)
+                                               notes=notes)
             except Exception:  # noqa: BLE001 (OCC, numpy): the build says why, faceting it
                 continue
         if cache[(a, True)][3] is not None:

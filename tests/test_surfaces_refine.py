@@ -328,20 +328,15 @@ def test_a_merge_measured_on_a_segment_before_it_grew_is_not_made():
     chamfer. The plane's pending union with the sliver was measured on the sliver alone: made
     anyway, it put the chamfer into the plane (tuning countersunk_plate_s1039's bottom
     chamfer). The union is measured again, and refused."""
+    from meshes import grid
+
     from igl_heatseg.surfaces import merge
     from igl_heatseg.surfaces.segment_fit import fit_faces
 
     xs = np.r_[np.arange(11.0), 10.01, 10.5, 11.0 + np.arange(3) * 0.5]
-    ys = np.arange(11.0)
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    V = np.c_[X.ravel(), Y.ravel(), np.tan(np.radians(20)) * np.maximum(X.ravel() - 10, 0)]
-    nx, ny = len(xs), len(ys)
-    F = []
-    for i in range(nx - 1):
-        for j in range(ny - 1):
-            a, b, c, d = i * ny + j, (i + 1) * ny + j, (i + 1) * ny + j + 1, i * ny + j + 1
-            F += [[a, b, c], [a, c, d]]
-    F = np.array(F)
+    V, F = grid(len(xs) - 1, 10, len(xs) - 1, 10.0)  # unit columns, then moved to xs
+    V[:, 0] = xs[np.rint(V[:, 0]).astype(int)]
+    V[:, 2] = np.tan(np.radians(20)) * np.maximum(V[:, 0] - 10, 0)
     x = V[F, 0]
     labels = np.where(x.max(axis=1) <= 10, 0, 2).astype(np.int64)
     sliver = np.flatnonzero((x.min(axis=1) == 10) & ((x == 10).sum(axis=1) == 2))[4]

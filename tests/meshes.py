@@ -139,6 +139,29 @@ def plane_into_cylinder(noise: float, seed: int = 0, h: float = 0.25, R: float =
     return V, F, S, {0: plane, 1: cyl}
 
 
+def pipe_bend(noise: float, seed: int = 0, r: float = 3.0, R: float = 10.0, length: float = 12.0,
+              h: float = 0.4):
+    """A tube of radius r: a straight cylinder along x (arc length s in [-length, 0]) running
+    tangentially into a 90-degree torus bend of major radius R towards +z, gridded at about h
+    along and around, vertices moved by Gaussian noise: V, F, and the arc length of each face's
+    centroid (negative on the cylinder)."""
+    s = np.arange(-length, R * np.pi / 2 + h / 2, h)
+    phi = np.arange(0.0, 2 * np.pi, h / r)
+    S, P = np.meshgrid(s, phi, indexing="ij")
+    t = np.clip(S, 0, None) / R
+    C = np.stack([np.where(S < 0, S, R * np.sin(t)), 0 * S, np.where(S < 0, 0, R - R * np.cos(t))],
+                 axis=-1)
+    N1 = np.stack([-np.sin(t), 0 * S, np.cos(t)], axis=-1)
+    N2 = np.stack([0 * S, 1 + 0 * S, 0 * S], axis=-1)
+    V = (C + r * (np.cos(P)[..., None] * N1 + np.sin(P)[..., None] * N2)).reshape(-1, 3)
+    idx = np.arange(S.size).reshape(S.shape)
+    a, b = idx[:-1].ravel(), idx[1:].ravel()
+    c, d = np.roll(idx[1:], -1, axis=1).ravel(), np.roll(idx[:-1], -1, axis=1).ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    V = V + np.random.default_rng(seed).normal(scale=noise, size=V.shape)
+    return V, F, S.ravel()[F].mean(axis=1)
+
+
 def revolved(profile, n=96):
     """A surface of revolution about z, one row of quads (two triangles each) per segment of
     the ``(r, z)`` profile polyline, ``n`` around; returns V, F and each face's profile

@@ -23,6 +23,8 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    follow the crease instead of zig-zagging along triangle edges.
 5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut, then merge again
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
+   A segment fitting worse than the noise gives its neighbours the faces on their surfaces
+   (a piece across a pipe's cylinder-to-torus joint: :mod:`~igl_heatseg.surfaces.loose`).
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
    neighbours that fit them, so a freeform neighbour's triangle stayed); on a noisy mesh a
@@ -53,6 +55,7 @@ from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
+from .loose import absorb_loose
 from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
 from .seams import corner_blends, corner_sphere, seam_blends
@@ -744,8 +747,9 @@ def refine_segmentation(
             merged += merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
     t = time.perf_counter()
-    if split and _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
-                                    unsplit):
+    if split and (_split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
+                                     unsplit) + (0 if exact else absorb_loose(V, F, labels, fits,
+                                                                              tol, TT, W, FN))):
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
         merged += (merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
                    if merge else 0)

@@ -1,13 +1,17 @@
 """A loose segment across a smooth joint gives its faces to the neighbours they lie on
 (``surfaces.loose.absorb_loose``)."""
+import igl
 import numpy as np
 import pytest
 from meshes import pipe_bend, plane_into_cylinder
 
 from igl_heatseg.mesh.geometry import face_normals
 from igl_heatseg.surfaces.loose import LOOSE_RATIO, absorb_loose
-from igl_heatseg.surfaces.refine import _adjacency
 from igl_heatseg.surfaces.segment_fit import fit_faces
+
+
+def _adjacency(F):
+    return igl.triangle_triangle_adjacency(F)[0]
 
 
 def _fits(V, F, labels, tol, FN):

@@ -108,9 +108,8 @@ def absorb_loose(V, F, labels, fits: dict, tol: float, TT, W=None, FN=None) -> i
     piece fits a cylinder at 2.4 times the plane's RMS; its faces go to the plane and the roll,
     whose border is then at the join (within a face).
 
-    >>> import numpy as np
+    >>> import igl, numpy as np
     >>> from igl_heatseg.mesh.geometry import face_normals
-    >>> from igl_heatseg.surfaces.refine import _adjacency
     >>> from igl_heatseg.surfaces.segment_fit import fit_faces
     >>> u, w = np.meshgrid(np.linspace(-20, 9.4, 50), np.linspace(0, 20, 34), indexing="ij")
     >>> t = np.clip(u, 0, None) / 6
@@ -121,7 +120,7 @@ def absorb_loose(V, F, labels, fits: dict, tol: float, TT, W=None, FN=None) -> i
     >>> V += np.random.default_rng(0).normal(0, 0.02, V.shape)
     >>> uf = u.ravel()[F].mean(axis=1)
     >>> labels = np.digitize(uf, [-3, 3]).astype(np.int64)
-    >>> TT, FN = _adjacency(F), face_normals(V, F)
+    >>> TT, FN = igl.triangle_triangle_adjacency(F)[0], face_normals(V, F)
     >>> fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), 0.06, FN=FN) for k in (0, 1, 2)}
     >>> [fits[k].kind for k in fits], round(fits[1].rms / fits[0].rms, 1)
     (['plane', 'cylinder', 'cylinder'], 2.4)

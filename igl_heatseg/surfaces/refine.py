@@ -23,8 +23,8 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    follow the crease instead of zig-zagging along triangle edges.
 5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut, then merge again
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
-   A segment fitting worse than the noise gives its neighbours the faces on their surfaces
-   (a piece across a pipe's cylinder-to-torus joint: :mod:`~igl_heatseg.surfaces.loose`).
+   Then a segment fitting worse than the noise gives neighbours the faces on their surfaces
+   (:mod:`.loose`); after step 6, tangent pipe joints get their border (:mod:`.joints`).
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
    neighbours that fit them, so a freeform neighbour's triangle stayed); on a noisy mesh a
@@ -55,6 +55,7 @@ from ..mesh.geometry import face_areas, face_normals
 from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
+from .joints import tangent_joints
 from .loose import absorb_loose
 from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
@@ -759,6 +760,7 @@ def refine_segmentation(
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if split and not exact:  # (an exact tessellation's caps leave at their creases, below)
         n_split += cut_caps(V, F, labels, fits, tol, TT, FN, W)
+        moved += tangent_joints(V, F, labels, fits, TT, tol / K_NOISE)  # (refitted below)
     corners = corner_blends(V, F, labels, fits, tol, W, FN) if split else []
     n_split += len(corners)
     guesses = {c: fits[c] for c in corners}

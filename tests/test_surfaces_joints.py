@@ -54,3 +54,18 @@ def test_a_dome_meeting_its_cylinder_at_a_crease_is_left_to_the_moves():
     TT = igl.triangle_triangle_adjacency(F)[0]
     assert tangent_joints(V, F, labels, fits, TT, 0.01) == 0
     assert (labels == before).all()
+
+
+def test_a_joint_fitted_a_fraction_of_an_edge_off_keeps_the_mesh_loop_on_it():
+    # the sphere's fitted centre 0.1 above the rim, where the dome's first ring of triangles
+    # (up to the next loop of edges at z = 0.24) has centroids at z = 0.08 and 0.16: cut by
+    # centroids, every other triangle of that ring would go to the cylinder (a staircase twice
+    # the rim's length); the nearer loop of edges is the rim
+    V, F, z, fits = _capsule(3.0)
+    fits[1].params["center"] = np.array([0.0, 0, 0.1])
+    first = (z > 0) & (z < 0.25)
+    assert (z[first] < 0.1).any() and (z[first] > 0.1).any()
+    labels = (z > -1.5).astype(np.int64)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    tangent_joints(V, F, labels, fits, TT, 0.01)
+    assert (labels == (z > 0)).all()

@@ -357,7 +357,7 @@ def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     from meshes import grid
 
     from igl_heatseg.mesh.geometry import face_normals
-    from igl_heatseg.surfaces import refine
+    from igl_heatseg.surfaces import strays
     from igl_heatseg.surfaces.segment_fit import fit_faces
 
     V, F = grid(60, 60)
@@ -371,8 +371,8 @@ def test_a_noisy_shard_joins_the_surface_that_still_fits_with_it():
     FN = face_normals(V, F)
     fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, FN=FN) for k in (0, 1)}
     assert fits[0].kind == "plane" and fits[0].rms <= tol
-    assert np.array_equal(refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
-    out = refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
+    assert np.array_equal(strays.absorb_shards(V, F, labels, dict(fits), tol, TT, FN), labels)
+    out = strays.absorb_shards(V, F, labels, dict(fits), tol, TT, FN, exact=False)
     assert (out == 0).all()
 
 
@@ -384,7 +384,7 @@ def test_a_noisy_shard_on_a_cylinder_joins_it_by_its_mean_normal():
     from meshes import cylinder
 
     from igl_heatseg.mesh.geometry import face_normals
-    from igl_heatseg.surfaces import refine
+    from igl_heatseg.surfaces import strays
     from igl_heatseg.surfaces.segment_fit import fit_faces, normals_agree
 
     V0, F = cylinder(160, 40, radius=2.0, height=4.0, caps=False)
@@ -405,11 +405,11 @@ def test_a_noisy_shard_on_a_cylinder_joins_it_by_its_mean_normal():
         fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, W=W, FN=FN) for k in (0, 1)}
         assert fits[0].kind == "cylinder"
         tilted += not normals_agree(V, F, FN, shard, fits[0])
-        out = refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN, W, exact=False)
+        out = strays.absorb_shards(V, F, labels, dict(fits), tol, TT, FN, W, exact=False)
         assert (out == 0).all(), seed
         # an exact tessellation keeps its normals test (a shard there can be a true face)
         if not normals_agree(V, F, FN, shard, fits[0]):
-            assert (refine._absorb_shards(V, F, labels, dict(fits), tol, TT, FN, W)[shard]
+            assert (strays.absorb_shards(V, F, labels, dict(fits), tol, TT, FN, W)[shard]
                     == 1).all()
     assert tilted >= 3  # the case: the faces' normals alone would keep the shard apart
 

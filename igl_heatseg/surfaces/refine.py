@@ -69,9 +69,7 @@ from .segment_fit import (
     corner_rms,
     explains,
     fit_faces,
-    mean_normal_agrees,
     normal_angle,
-    normals_agree,
     refit_segments,
 )
 from .split import (
@@ -86,7 +84,7 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import cut_caps, shed_strays, split_at_creases
+from .strays import SHARD_FACES, absorb_shards, cut_caps, shed_strays, split_at_creases
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -128,8 +126,6 @@ CORE_MIN_SHARE = 0.3
 #: within GROW_TOL x tol) hold this share of its area; else the segment is split.
 CORE_EXPLAINS = 0.85
 
-#: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
-SHARD_FACES = 8
 
 #: On a noisy mesh, a face is off its segment's surface for :func:`_regrow_strays` when one of
 #: its corners is farther than this x tol. tol is 2.5 noise levels, so this is 5 of them, which
@@ -148,23 +144,6 @@ STRAY_TOL_NOISY = 2.0
 #: it; f20 sprocket_s20001_frontal_n0.05: 110 -> 134, with it 112).
 REGROW_MIN_FACES_NOISY = 20
 
-#: ... and on a noisy mesh a segment of fewer than MIN_REGION_FACES faces and under this share
-#: of the mesh's area joins a neighbour that then still fits one surface. Set from face counts,
-#: not scores: a dense mesh's triangle is 3e-5 - 2e-4 of its area (5k - 30k faces), where one
-#: or two faces are never a face of the part; a coarse export's is 1e-3 - 2e-3 (500 - 1,000
-#: faces), where a chamfer can be two triangles.
-SHARD_AREA = 5e-4
-
-#: ... and on a noisy mesh a shard whose corners are within SHARD_ON_TOL x tol (RMS) of a
-#: neighbour's surface joins it when the shard's mean normal (area-weighted sum of its face
-#: normals) is within GROW_ANGLE of the surface's there, though its faces' own normals are not:
-#: at noise 0.2 a fifth of the faces' normals are over GROW_ANGLE off, so a shard of 3-7 faces
-#: on a narrow cylinder failed :func:`~.segment_fit.normals_agree` (tuning-3
-#: domed_cap_s6027_frontal_n0.2: three shards of a narrow cylinder, 0.29-0.44 tol from its
-#: segment's surface, stayed segments). Held to tol, not GROW_TOL x tol: the corners of a
-#: chamfer one row of triangles wide all lie on its neighbours, and its mean normal, not its
-#: distance, keeps it.
-SHARD_ON_TOL = 1.0
 
 #: On a noisy mesh a segment whose surface explains it (RMS within tol) but fits worse than
 #: this x tol fits worse than the merges accept of a union (the noise level tol / K_NOISE times
@@ -443,47 +422,6 @@ def _smooth_teeth(V, F, labels, fits: dict, tol: float, TT, FN) -> int:
     return changed
 
 
-def _absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
-                   exact=True) -> np.ndarray:
-    """Small segments (fewer than SHARD_FACES faces) that lie on a neighbour's surface (corner
-    RMS within GROW_TOL x tol, normals agreeing; on a noisy mesh also within SHARD_ON_TOL x tol
-    with their mean normal agreeing) join it; unexplained ones of fewer than
-    MIN_REGION_FACES faces join the nearest neighbour whatever the distance. A true small face
-    (a chamfer two triangles wide) is off its neighbours' surfaces and explained by its own: it
-    stays. On a noisy mesh (not ``exact``) a segment of fewer than MIN_REGION_FACES faces,
-    whose fit is no evidence, also joins the nearest neighbour that one surface then still
-    explains with it (the shards a split leaves of a small face cut up by the noise)."""
-    labels = labels.copy()
-    counts = np.bincount(labels)
-    total = float(face_areas(V, F).sum())
-    for k in np.flatnonzero((counts > 0) & (counts < SHARD_FACES)).tolist():
-        faces = np.flatnonzero(labels == k)
-        nb = np.unique(labels[TT[faces][TT[faces] >= 0]])
-        nb = [j for j in nb.tolist() if j != k]
-        if not nb:
-            continue
-        d = [float(np.sqrt(np.mean(corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
-        j = int(np.argmin(d))
-        tiny = len(faces) < MIN_REGION_FACES and not explains(fits[k], tol)
-        on = d[j] <= GROW_TOL * tol and normals_agree(V, F, FN, faces, fits[nb[j]])
-        small = face_areas(V, F[faces]).sum() < SHARD_AREA * total
-        on = on or (not exact and small and d[j] <= SHARD_ON_TOL * tol
-                    and fits[nb[j]].is_analytic and mean_normal_agrees(V, F, faces, fits[nb[j]]))
-        if on or tiny:
-            labels[faces] = nb[j]
-        elif not exact and len(faces) < MIN_REGION_FACES and small:
-            for i in np.argsort(d).tolist():
-                if not explains(fits[nb[i]], tol):
-                    continue
-                union = np.r_[np.flatnonzero(labels == nb[i]), faces]
-                u = fit_faces(V, F, union, tol, W=W, FN=FN)
-                if explains(u, tol):
-                    labels[faces] = nb[i]
-                    fits[nb[i]] = u
-                    break
-    return labels
-
-
 def _regrow_strays(V, F, labels, fits: dict, tol: float, TT, W, FN, nxt: int,
                    exact: bool = True) -> int:
     """The faces off their segment's surface (corner RMS above GROW_TOL x tol; on a noisy mesh a
@@ -756,7 +694,7 @@ def refine_segmentation(
                    if merge else 0)
     timings["split_again"] = time.perf_counter() - t
     t = time.perf_counter()
-    labels = _absorb_shards(V, F, labels, fits, tol, TT, FN, W, exact)
+    labels = absorb_shards(V, F, labels, fits, tol, TT, FN, W, exact)
     shed_strays(V, F, labels, fits, tol, TT, FN)  # the segments are refitted below
     if split and not exact:  # (an exact tessellation's caps leave at their creases, below)
         n_split += cut_caps(V, F, labels, fits, tol, TT, FN, W)

@@ -15,18 +15,44 @@ import math
 
 import numpy as np
 
+from ..mesh.geometry import face_areas
 from ..mesh.topology import label_pieces
 from .segment_fit import (
+    GROW_TOL,
+    MIN_REGION_FACES,
     corner_max_dev,
     corner_rms,
     explains,
     fit_faces,
+    mean_normal_agrees,
     normal_angle,
+    normals_agree,
     refit_segments,
 )
 from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays", "split_at_creases", "cut_caps"]
+__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards"]
+
+#: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
+SHARD_FACES = 8
+
+#: On a noisy mesh a segment of fewer than MIN_REGION_FACES faces and under this share of the
+#: mesh's area joins a neighbour that then still fits one surface. Set from face counts,
+#: not scores: a dense mesh's triangle is 3e-5 - 2e-4 of its area (5k - 30k faces), where one
+#: or two faces are never a face of the part; a coarse export's is 1e-3 - 2e-3 (500 - 1,000
+#: faces), where a chamfer can be two triangles.
+SHARD_AREA = 5e-4
+
+#: ... and on a noisy mesh a shard whose corners are within SHARD_ON_TOL x tol (RMS) of a
+#: neighbour's surface joins it when the shard's mean normal (area-weighted sum of its face
+#: normals) is within GROW_ANGLE of the surface's there, though its faces' own normals are not:
+#: at noise 0.2 a fifth of the faces' normals are over GROW_ANGLE off, so a shard of 3-7 faces
+#: on a narrow cylinder failed :func:`~.segment_fit.normals_agree` (tuning-3
+#: domed_cap_s6027_frontal_n0.2: three shards of a narrow cylinder, 0.29-0.44 tol from its
+#: segment's surface, stayed segments). Held to tol, not GROW_TOL x tol: the corners of a
+#: chamfer one row of triangles wide all lie on its neighbours, and its mean normal, not its
+#: distance, keeps it.
+SHARD_ON_TOL = 1.0
 
 #: A border face is a stray when its normal is more than this angle from its surface's ...
 STRAY_ANGLE = math.radians(60.0)
@@ -332,3 +358,89 @@ def cut_caps(V: np.ndarray, F: np.ndarray, labels: np.ndarray, fits: dict, tol: 
         if cut:
             refit_segments(V, F, labels, fits, [k], tol, W, FN)
     return made
+
+
+def absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
+                   exact=True) -> np.ndarray:
+    """Small segments join the neighbour they lie on; a true small face stays.
+
+    A segment of fewer than SHARD_FACES faces joins its nearest neighbour (corner RMS) when it
+    lies on the neighbour's surface (within GROW_TOL x tol, normals agreeing; on a noisy mesh
+    also a shard under SHARD_AREA of the area within SHARD_ON_TOL x tol whose mean normal
+    agrees), and whatever the distance when it has fewer than MIN_REGION_FACES faces and its
+    own fit does not explain it. A true small face (a chamfer two triangles wide) is off its
+    neighbours' surfaces and explained by its own: it stays. On a noisy mesh (not ``exact``) a
+    small segment of fewer than MIN_REGION_FACES faces, whose fit is no evidence, also joins
+    the nearest neighbour that one surface then still explains with it (the shards a split
+    leaves of a small face cut up by the noise).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment id per face (not changed).
+    fits : dict
+        Segment id -> Surface; a noisy shard's receiver gets its refit here.
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        Triangle-triangle adjacency (-1 on the border).
+    FN : (m, 3) float64
+        Unit face normals.
+    W : (n, 3) float64, optional
+        Positions for the fits' normals (see :func:`~.segment_fit.fit_faces`).
+    exact : bool
+        Whether the mesh is an exact tessellation.
+
+    Returns
+    -------
+    (m,) int64
+        The new labels (ids of the segments that took shards; the shards' ids are gone).
+
+    Examples
+    --------
+    Two triangles of a flat grid labelled apart lie on the plane of the rest, and join it.
+
+    >>> import igl, numpy as np
+    >>> from igl_heatseg.mesh.geometry import face_normals
+    >>> from igl_heatseg.surfaces.segment_fit import fit_faces
+    >>> x, y = np.meshgrid(np.arange(7.0), np.arange(7.0), indexing="ij")
+    >>> V = np.c_[x.ravel(), y.ravel(), np.zeros(49)]
+    >>> i = (np.arange(6)[:, None] * 7 + np.arange(6)).ravel()
+    >>> F = np.r_[np.c_[i, i + 7, i + 8], np.c_[i, i + 8, i + 1]]
+    >>> labels = np.zeros(len(F), dtype=np.int64); labels[[0, 36]] = 1
+    >>> TT, FN = igl.triangle_triangle_adjacency(F)[0], face_normals(V, F)
+    >>> fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), 1e-3, FN=FN) for k in (0, 1)}
+    >>> np.unique(absorb_shards(V, F, labels, fits, 1e-3, TT, FN)).tolist()
+    [0]
+    """
+    labels = labels.copy()
+    counts = np.bincount(labels)
+    total = float(face_areas(V, F).sum())
+    for k in np.flatnonzero((counts > 0) & (counts < SHARD_FACES)).tolist():
+        faces = np.flatnonzero(labels == k)
+        nb = np.unique(labels[TT[faces][TT[faces] >= 0]])
+        nb = [j for j in nb.tolist() if j != k]
+        if not nb:
+            continue
+        d = [float(np.sqrt(np.mean(corner_rms(V, F, faces, fits[j]) ** 2))) for j in nb]
+        j = int(np.argmin(d))
+        tiny = len(faces) < MIN_REGION_FACES and not explains(fits[k], tol)
+        on = d[j] <= GROW_TOL * tol and normals_agree(V, F, FN, faces, fits[nb[j]])
+        small = face_areas(V, F[faces]).sum() < SHARD_AREA * total
+        on = on or (not exact and small and d[j] <= SHARD_ON_TOL * tol
+                    and fits[nb[j]].is_analytic and mean_normal_agrees(V, F, faces, fits[nb[j]]))
+        if on or tiny:
+            labels[faces] = nb[j]
+        elif not exact and len(faces) < MIN_REGION_FACES and small:
+            for i in np.argsort(d).tolist():
+                if not explains(fits[nb[i]], tol):
+                    continue
+                union = np.r_[np.flatnonzero(labels == nb[i]), faces]
+                u = fit_faces(V, F, union, tol, W=W, FN=FN)
+                if explains(u, tol):
+                    labels[faces] = nb[i]
+                    fits[nb[i]] = u
+                    break
+    return labels

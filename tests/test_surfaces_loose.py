@@ -1,12 +1,13 @@
 """A loose segment across a smooth joint gives its faces to the neighbours they lie on
-(``surfaces.loose.absorb_loose``)."""
+(``surfaces.loose.absorb_loose``); one across a crease with no neighbour to take its faces is
+split there (``surfaces.loose.split_loose``)."""
 import igl
 import numpy as np
 import pytest
 from meshes import pipe_bend, plane_into_cylinder
 
 from igl_heatseg.mesh.geometry import face_normals
-from igl_heatseg.surfaces.loose import LOOSE_RATIO, absorb_loose
+from igl_heatseg.surfaces.loose import LOOSE_RATIO, absorb_loose, split_loose
 from igl_heatseg.surfaces.segment_fit import fit_faces
 
 
@@ -64,3 +65,57 @@ def test_a_loose_segment_its_neighbour_reaches_only_at_the_border_stays():
     assert fits[1].rms > LOOSE_RATIO * fits[0].rms
     assert absorb_loose(V, F, labels, fits, 0.1, TT, FN=FN) == 0
     assert sorted(np.unique(labels).tolist()) == [0, 1]
+
+
+def _strip_of_plane(seed, bend_deg=0.0, strip_noise=1.0, sigma=0.02, w=6.0):
+    """A 40 x 20 noisy grid (spacing 0.5), bent by ``bend_deg`` at x = 0, its noise
+    ``strip_noise`` times larger within ``w`` of it; labels: the two flanks and the strip."""
+    x, y = np.meshgrid(np.linspace(-20, 20, 81), np.linspace(0, 20, 41), indexing="ij")
+    z = np.tan(np.radians(bend_deg)) * np.clip(x, 0, None)
+    V = np.c_[x.ravel(), y.ravel(), z.ravel()]
+    scale = np.where(np.abs(V[:, 0]) < w, strip_noise, 1.0)
+    V[:, 2] += np.random.default_rng(seed).normal(0, sigma, len(V)) * scale
+    i = (np.arange(80)[:, None] * 41 + np.arange(40)).ravel()
+    F = np.r_[np.c_[i, i + 41, i + 42], np.c_[i, i + 42, i + 1]]
+    xf = V[F].mean(axis=1)[:, 0]
+    return V, F, xf, np.digitize(xf, [-w, w]).astype(np.int64)
+
+
+def _grow_split(V, F, TT, FN, tol):
+    from igl_heatseg.surfaces.refine import grow_regions
+
+    def split(faces, t):
+        sub = grow_regions(V, F, faces, t, FN, TT)
+        parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
+        return parts, [fit_faces(V, F, p, tol, FN=FN) for p in parts]
+    return split
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_loose_strip_across_a_crease_is_split_at_it(seed):
+    # a 5-degree crease inside one segment: a cylinder explains it within tolerance, at 1.3-1.5
+    # times the flanks' RMS; cut near the noise, it falls into the two planes
+    V, F, xf, labels = _strip_of_plane(seed, bend_deg=5.0)
+    TT, FN, tol = _adjacency(F), face_normals(V, F), 0.05
+    fits = _fits(V, F, labels, tol, FN)
+    assert fits[1].kind == "cylinder" and fits[1].rms > LOOSE_RATIO * fits[0].rms
+    assert split_loose(V, F, labels, fits, tol, _grow_split(V, F, TT, FN, tol)) == 1
+    strip = np.abs(xf) < 6
+    pieces = np.unique(labels[strip])
+    assert len(pieces) == 2 and all(fits[k].kind == "plane" for k in pieces)
+    left = labels[strip & (xf < -1)]
+    right = labels[strip & (xf > 1)]
+    assert len(np.unique(left)) == 1 and len(np.unique(right)) == 1 and left[0] != right[0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_noisier_patch_of_one_plane_is_not_split(seed):
+    # the strip fits its plane at 1.5-1.8 times the flanks' RMS because it is noisier, not bent:
+    # its pieces fit no better, and it stays whole
+    V, F, _, labels = _strip_of_plane(seed, strip_noise=1.7)
+    TT, FN, tol = _adjacency(F), face_normals(V, F), 0.05
+    fits = _fits(V, F, labels, tol, FN)
+    assert fits[1].kind == "plane" and fits[1].rms > LOOSE_RATIO * fits[0].rms
+    before = labels.copy()
+    assert split_loose(V, F, labels, fits, tol, _grow_split(V, F, TT, FN, tol)) == 0
+    assert (labels == before).all() and sorted(fits) == [0, 1, 2]

@@ -7,9 +7,15 @@ three quarters of the bend's torus and a quarter of the straight cylinder, fitte
 1.28 times the noise (the other segments: 0.92-1.04 times). Its faces lie within the noise of
 the neighbouring torus and cylinder segments' surfaces, each flooded from their shared
 border; those segments take them (:func:`absorb_loose`).
+
+A loose segment that holds two true faces with no segment of their own next to it (a
+counterbore's flat bottom ring and its wall, one cone at 1.4-1.8 times the noise on tuning
+plate_s1012_irregular_n0.1) is split instead, at a tolerance near the noise
+(:func:`split_loose`).
 """
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
@@ -19,7 +25,16 @@ from ..mesh.topology import label_pieces
 from .segment_fit import GROW_ANGLE, corner_rms, fit_faces, normal_angle
 from .tolerance import K_NOISE
 
-__all__ = ["absorb_loose", "LOOSE_RATIO", "LOOSE_MIN_FACES", "LOOSE_ON_RATIO", "LOOSE_TAKE_SHARE"]
+__all__ = [
+    "absorb_loose",
+    "split_loose",
+    "LOOSE_RATIO",
+    "LOOSE_MIN_FACES",
+    "LOOSE_ON_RATIO",
+    "LOOSE_TAKE_SHARE",
+    "LOOSE_SPLIT_K",
+    "LOOSE_SPLIT_SHARE",
+]
 
 #: A segment is loose when its RMS is above this times the noise level: the median RMS of the
 #: analytic segments of at least LOOSE_MIN_FACES faces, floored at tol / K_NOISE (the noise the
@@ -39,6 +54,17 @@ LOOSE_ON_RATIO = 2.0
 #: ... and only when the neighbours take at least this share of the loose segment's area (less
 #: is a ragged border, which the boundary moves deal with).
 LOOSE_TAKE_SHARE = 0.15
+
+#: split_loose: a loose segment is split (region growing, then RANSAC) at this times the median
+#: RMS of the part's analytic segments (unfloored; at most tol), and its pieces refitted at tol.
+#: Tried on tuning at 1.5, 2 and 2.5 x: at 2 and more the growth still took the counterbore's
+#: wall and floor into one plane (plate_s1012: pieces at 1.3-1.9 x the noise).
+LOOSE_SPLIT_K = 1.5
+
+#: ... and only when its second largest piece holds at least this share of its area: a fillet's
+#: cylinder holding the faces of its corner sphere sheds them as a scrap, which the corner
+#: blends (:func:`~.seams.corner_blends`) need in place.
+LOOSE_SPLIT_SHARE = 0.15
 
 
 def _flood(TT, faces, pos, start, ok) -> np.ndarray:
@@ -129,12 +155,11 @@ def absorb_loose(V, F, labels, fits: dict, tol: float, TT, W=None, FN=None) -> i
     >>> bool(uf[labels == 0].max() < 0.6 and uf[labels == 2].min() > -0.6)
     True
     """
-    area = face_areas(V, F)
-    size = dict(zip(*np.unique(labels, return_counts=True), strict=True))
-    big = {k for k, s in fits.items() if s.is_analytic and size.get(k, 0) >= LOOSE_MIN_FACES}
-    if not big:
+    found = _noise(labels, fits, tol)
+    if found is None:
         return 0
-    noise = max(float(np.median([fits[k].rms for k in big])), tol / K_NOISE)
+    big, _, noise = found
+    area = face_areas(V, F)
     loose = sorted((k for k in big if fits[k].rms > LOOSE_RATIO * noise),
                    key=lambda k: -fits[k].rms)
     pos = np.full(len(F), -1, dtype=np.int64)
@@ -182,6 +207,112 @@ def absorb_loose(V, F, labels, fits: dict, tol: float, TT, W=None, FN=None) -> i
                 s = fit_faces(V, F, part, tol, W=W, FN=FN)
             lab = k if k not in fits else nxt
             nxt += lab == nxt
+            labels[part] = lab
+            fits[lab] = s
+        n += 1
+    return n
+
+
+def _noise(labels, fits: dict, tol: float):
+    """The segments that measure the noise (analytic, LOOSE_MIN_FACES faces or more), their
+    median RMS, and the noise level (that median floored at ``tol / K_NOISE``); None when
+    there is no such segment."""
+    size = dict(zip(*np.unique(labels, return_counts=True), strict=True))
+    big = {k for k, s in fits.items() if s.is_analytic and size.get(k, 0) >= LOOSE_MIN_FACES}
+    if not big:
+        return None
+    med = float(np.median([fits[k].rms for k in big]))
+    return big, med, max(med, tol / K_NOISE)
+
+
+def split_loose(V, F, labels, fits: dict, tol: float, split) -> int:
+    """Split the loose segments that fall apart into surfaces fitting clearly better.
+
+    A segment is loose as for :func:`absorb_loose` (analytic, LOOSE_MIN_FACES faces or more,
+    RMS above LOOSE_RATIO x the noise level). ``split`` cuts it at LOOSE_SPLIT_K x the median
+    RMS of the part's analytic segments (at most ``tol``): the growth then stops where a face
+    leaves a surface by more than the noise, not by the tolerance (2.5 noise levels, within
+    which one cone took a counterbore's floor and wall). The pieces are kept when their
+    pooled RMS (area-weighted) is LOOSE_RATIO times below the segment's and the second largest
+    holds LOOSE_SPLIT_SHARE of the area; a single surface that fits loosely everywhere (a
+    noisier patch) falls into pieces that fit no better, and a scrap shed from one surface is
+    left to the passes that deal out scraps.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment id per face; changed in place (the first piece keeps the id, the others get
+        new ones).
+    fits : dict
+        Segment id -> Surface; changed in place.
+    tol : float
+        Fit tolerance (model units).
+    split : callable
+        ``split(faces, t)`` -> ``(parts, part_fits)``, the pieces of a face set cut at
+        tolerance ``t`` and their surfaces fitted at ``tol``, or ``(None, None)`` when it
+        finds no real faces (refine's region growing and RANSAC).
+
+    Returns
+    -------
+    int
+        Segments split.
+
+    Examples
+    --------
+    A noisy plane bent by 5 degrees at ``x = 0``, in three segments: the two flanks and a
+    strip across the bend, which one cylinder explains at 1.5 times the flanks' RMS. The
+    strip is cut at the bend.
+
+    >>> import igl, numpy as np
+    >>> from igl_heatseg.mesh.geometry import face_normals
+    >>> from igl_heatseg.surfaces.refine import grow_regions
+    >>> from igl_heatseg.surfaces.segment_fit import fit_faces
+    >>> x, y = np.meshgrid(np.linspace(-20, 20, 81), np.linspace(0, 20, 41), indexing="ij")
+    >>> z = np.tan(np.radians(5)) * np.clip(x, 0, None)
+    >>> V = np.c_[x.ravel(), y.ravel(), z.ravel()]
+    >>> V[:, 2] += np.random.default_rng(1).normal(0, 0.02, len(V))
+    >>> i = (np.arange(80)[:, None] * 41 + np.arange(40)).ravel()
+    >>> F = np.r_[np.c_[i, i + 41, i + 42], np.c_[i, i + 42, i + 1]]
+    >>> xf = V[F].mean(axis=1)[:, 0]
+    >>> labels = np.digitize(xf, [-6, 6]).astype(np.int64)
+    >>> TT, FN = igl.triangle_triangle_adjacency(F)[0], face_normals(V, F)
+    >>> tol = 0.05
+    >>> fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), tol, FN=FN) for k in (0, 1, 2)}
+    >>> [fits[k].kind for k in fits], round(fits[1].rms / fits[0].rms, 1)
+    (['plane', 'cylinder', 'plane'], 1.5)
+    >>> def split(faces, t):
+    ...     sub = grow_regions(V, F, faces, t, FN, TT)
+    ...     parts = [faces[sub == r] for r in range(sub.max() + 1)]
+    ...     return parts, [fit_faces(V, F, p, tol, FN=FN) for p in parts]
+    >>> split_loose(V, F, labels, fits, tol, split)
+    1
+    >>> sorted(np.round([xf[labels == k].mean() for k in np.unique(labels)], 0).tolist())
+    [-13.0, -3.0, 3.0, 13.0]
+    """
+    found = _noise(labels, fits, tol)
+    if found is None:
+        return 0
+    big, med, noise = found
+    area = face_areas(V, F)
+    nxt = int(labels.max()) + 1
+    n = 0
+    for k in [k for k in fits if k in big and fits[k].rms > LOOSE_RATIO * noise]:
+        faces = np.flatnonzero(labels == k)
+        parts, part_fits = split(faces, min(tol, LOOSE_SPLIT_K * med))
+        if parts is None:
+            continue
+        A = np.array([area[p].sum() for p in parts])
+        if np.sort(A)[-2] < LOOSE_SPLIT_SHARE * A.sum():
+            continue
+        r = np.array([s.rms if s.is_analytic else np.inf for s in part_fits])
+        pooled = math.sqrt(float(np.sum(A * r**2) / A.sum()))
+        if not math.isfinite(pooled) or LOOSE_RATIO * pooled > fits[k].rms:
+            continue
+        for i, (part, s) in enumerate(zip(parts, part_fits, strict=True)):
+            lab = k if i == 0 else nxt
+            nxt += i > 0
             labels[part] = lab
             fits[lab] = s
         n += 1

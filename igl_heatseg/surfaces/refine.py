@@ -23,8 +23,9 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    follow the crease instead of zig-zagging along triangle edges.
 5. On a noisy mesh, **place the boundaries of tangent joins** by a minimum cut, then merge again
    (:mod:`~igl_heatseg.surfaces.boundary_cut`): step 4 leaves the heat fields' zig-zag there.
-   Then a segment fitting worse than the noise gives neighbours the faces on their surfaces
-   (:mod:`.loose`); after step 6, tangent pipe joints get their border (:mod:`.joints`).
+   Then a segment fitting worse than the noise is split where it falls apart into surfaces
+   fitting clearly better, else gives neighbours the faces on their surfaces (:mod:`.loose`);
+   after step 6, tangent pipe joints get their border (:mod:`.joints`).
 6. **Shed strays**: a border face standing across its analytic surface goes to the neighbour
    it faces (:mod:`~igl_heatseg.surfaces.strays`; step 4 gives faces only to analytic
    neighbours that fit them, so a freeform neighbour's triangle stayed); on a noisy mesh a
@@ -56,7 +57,7 @@ from ..mesh.topology import label_pieces
 from .axes import snap_to_axes
 from .boundary_cut import swap_boundaries
 from .joints import tangent_joints
-from .loose import absorb_loose
+from .loose import absorb_loose, split_loose
 from .merge import MERGE_NOISE_RATIO, MERGE_NOISE_SLACK, UPGRADE_ANGLE, merge_segments
 from .samples import normal_positions, segment_adjacency, vertex_samples
 from .seams import corner_blends, corner_sphere, seam_blends
@@ -686,9 +687,18 @@ def refine_segmentation(
             merged += merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
     timings["boundary_cut"] = time.perf_counter() - t
     t = time.perf_counter()
-    if split and (_split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
-                                     unsplit) + (0 if exact else absorb_loose(V, F, labels, fits,
-                                                                              tol, TT, W, FN))):
+    late = _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
+                              unsplit) if split else 0
+    if split and not exact:  # a loose segment: split near the noise, else given away
+        tried: set = set()  # (a face set _split left whole at another tolerance may split)
+
+        def split_at(faces, t_split):
+            parts, _ = _split(V, F, faces, t_split, FN, TT, W, split_ratio, exact, tried)
+            return (None, None) if parts is None else (
+                parts, [fit_faces(V, F, p, tol, W=W, FN=FN) for p in parts])
+        late += split_loose(V, F, labels, fits, tol, split_at)
+        late += absorb_loose(V, F, labels, fits, tol, TT, W, FN)
+    if late:
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)
         merged += (merge_segments(V, F, labels, tol, fits, rejected, W, FN, not exact)
                    if merge else 0)

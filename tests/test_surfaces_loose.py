@@ -81,14 +81,19 @@ def _strip_of_plane(seed, bend_deg=0.0, strip_noise=1.0, sigma=0.02, w=6.0):
     return V, F, xf, np.digitize(xf, [-w, w]).astype(np.int64)
 
 
-def _grow_split(V, F, TT, FN, tol):
+def _split_strip(labels, V, F, tol=0.05):
+    """The strip's fits and ``split_loose`` with refine's region growing as its split."""
     from igl_heatseg.surfaces.refine import grow_regions
+
+    TT, FN = _adjacency(F), face_normals(V, F)
+    fits = _fits(V, F, labels, tol, FN)
 
     def split(faces, t):
         sub = grow_regions(V, F, faces, t, FN, TT)
         parts = [faces[sub == r] for r in range(int(sub.max()) + 1)]
         return parts, [fit_faces(V, F, p, tol, FN=FN) for p in parts]
-    return split
+    before = {k: (s.kind, s.rms) for k, s in fits.items()}
+    return before, split_loose(V, F, labels, fits, tol, split), fits
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -96,10 +101,9 @@ def test_a_loose_strip_across_a_crease_is_split_at_it(seed):
     # a 5-degree crease inside one segment: a cylinder explains it within tolerance, at 1.3-1.5
     # times the flanks' RMS; cut near the noise, it falls into the two planes
     V, F, xf, labels = _strip_of_plane(seed, bend_deg=5.0)
-    TT, FN, tol = _adjacency(F), face_normals(V, F), 0.05
-    fits = _fits(V, F, labels, tol, FN)
-    assert fits[1].kind == "cylinder" and fits[1].rms > LOOSE_RATIO * fits[0].rms
-    assert split_loose(V, F, labels, fits, tol, _grow_split(V, F, TT, FN, tol)) == 1
+    before, n, fits = _split_strip(labels, V, F)
+    assert before[1][0] == "cylinder" and before[1][1] > LOOSE_RATIO * before[0][1]
+    assert n == 1
     strip = np.abs(xf) < 6
     pieces = np.unique(labels[strip])
     assert len(pieces) == 2 and all(fits[k].kind == "plane" for k in pieces)
@@ -113,9 +117,7 @@ def test_a_noisier_patch_of_one_plane_is_not_split(seed):
     # the strip fits its plane at 1.5-1.8 times the flanks' RMS because it is noisier, not bent:
     # its pieces fit no better, and it stays whole
     V, F, _, labels = _strip_of_plane(seed, strip_noise=1.7)
-    TT, FN, tol = _adjacency(F), face_normals(V, F), 0.05
-    fits = _fits(V, F, labels, tol, FN)
-    assert fits[1].kind == "plane" and fits[1].rms > LOOSE_RATIO * fits[0].rms
-    before = labels.copy()
-    assert split_loose(V, F, labels, fits, tol, _grow_split(V, F, TT, FN, tol)) == 0
-    assert (labels == before).all() and sorted(fits) == [0, 1, 2]
+    start = labels.copy()
+    before, n, fits = _split_strip(labels, V, F)
+    assert before[1][0] == "plane" and before[1][1] > LOOSE_RATIO * before[0][1]
+    assert n == 0 and (labels == start).all() and sorted(fits) == [0, 1, 2]

@@ -301,7 +301,7 @@ def split_loose(V, F, labels, fits: dict, tol: float, split) -> int:
     for k in [k for k in fits if k in big and fits[k].rms > LOOSE_RATIO * noise]:
         faces = np.flatnonzero(labels == k)
         parts, part_fits = split(faces, min(tol, LOOSE_SPLIT_K * med))
-        if parts is None:
+        if parts is None or len(parts) < 2:
             continue
         A = np.array([area[p].sum() for p in parts])
         if np.sort(A)[-2] < LOOSE_SPLIT_SHARE * A.sum():

@@ -127,7 +127,6 @@ CORE_MIN_SHARE = 0.3
 #: within GROW_TOL x tol) hold this share of its area; else the segment is split.
 CORE_EXPLAINS = 0.85
 
-
 #: On a noisy mesh, a face is off its segment's surface for :func:`_regrow_strays` when one of
 #: its corners is farther than this x tol. tol is 2.5 noise levels, so this is 5 of them, which
 #: Gaussian noise alone passes at about one vertex in 2 million. On the housing rim of
@@ -144,7 +143,6 @@ STRAY_TOL_NOISY = 2.0
 #: became segments (f18 knob_s18003_frontal_n0.2: 32 -> 44 segments without this bar, 32 with
 #: it; f20 sprocket_s20001_frontal_n0.05: 110 -> 134, with it 112).
 REGROW_MIN_FACES_NOISY = 20
-
 
 #: On a noisy mesh a segment whose surface explains it (RMS within tol) but fits worse than
 #: this x tol fits worse than the merges accept of a union (the noise level tol / K_NOISE times

@@ -526,7 +526,12 @@ def _split_segment(V, F, faces, s, tol, FN, TT, W, ratio, exact, unsplit):
     ``tol``."""
     if not _overfit(s, tol, exact):
         return _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit)
-    parts, _ = _split(V, F, faces, OVERFIT_RATIO * tol, FN, TT, W, ratio, exact, unsplit)
+    return _split_refit(V, F, faces, OVERFIT_RATIO * tol, tol, FN, TT, W, ratio, exact, unsplit)
+
+
+def _split_refit(V, F, faces, t, tol, FN, TT, W, ratio, exact, unsplit):
+    """:func:`_split` at the tighter tolerance ``t``, the parts then refitted at ``tol``."""
+    parts, _ = _split(V, F, faces, t, FN, TT, W, ratio, exact, unsplit)
     if parts is None:
         return None, None
     return parts, [fit_faces(V, F, part, tol, W=W, FN=FN) for part in parts]
@@ -688,13 +693,9 @@ def refine_segmentation(
     late = _split_unexplained(V, F, labels, fits, tol, TT, W, FN, split_ratio, exact,
                               unsplit) if split else 0
     if split and not exact:  # a loose segment: split near the noise, else given away
-        tried: set = set()  # (a face set _split left whole at another tolerance may split)
-
-        def split_at(faces, t_split):
-            parts, _ = _split(V, F, faces, t_split, FN, TT, W, split_ratio, exact, tried)
-            return (None, None) if parts is None else (
-                parts, [fit_faces(V, F, p, tol, W=W, FN=FN) for p in parts])
-        late += split_loose(V, F, labels, fits, tol, split_at)
+        loose_unsplit: set = set()  # (a face set left whole at tol may split nearer the noise)
+        late += split_loose(V, F, labels, fits, tol, lambda faces, t_split: _split_refit(
+            V, F, faces, t_split, tol, FN, TT, W, split_ratio, exact, loose_unsplit))
         late += absorb_loose(V, F, labels, fits, tol, TT, W, FN)
     if late:
         labels, fits = _reconnect(V, F, labels, fits, tol, TT, W, FN)

@@ -51,7 +51,7 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["brep_fidelity", "count_free_edges", "faces_of", "shells_of", "face_area", "face_points",
            "face_samples", "tessellate", "tessellate_by_type", "face_type", "mesh_volume",
-           "shape_analysis", "shape_valid", "shell_of"]
+           "solid_volume", "shape_analysis", "shape_valid", "shell_of"]
 
 #: Tessellation deflection for distance measurements, as a fraction of the bbox diagonal: the
 #: B-Rep-to-mesh distances are exact up to it (5e-4 of a 100 mm part is 50 um, a tenth of
@@ -120,6 +120,13 @@ MESH_ANGLE = 0.3
 #: unchanged, those of the 24 f17 models within 0.007 % of the diagonal. 0.25 moved one by
 #: 0.11 %.
 MESH_MIN_SIZE = 0.15
+
+#: Relative error asked of OCC's adaptive volume integration (:func:`solid_volume`). Its default,
+#: a fixed-order Gauss rule per face, read a valid 14-face solid (held-out
+#: saddle_boss_s38036_frontal_n0.1: partial tori and a cone trimmed by intersection curves) as
+#: 58,031 where it is 59,251 (-2.1 %; the true part is 59,227): 1e-4, 1e-6 and 1e-8 all give
+#: 59,250.7. On ten noise-0.1 models it took 0.01-0.73 s against 0.00-0.14 s.
+VOLUME_EPS = 1e-6
 
 _TYPE_NAMES = {
     GeomAbs_SurfaceType.GeomAbs_Plane: "plane",
@@ -209,6 +216,31 @@ def mesh_volume(V: np.ndarray, F: np.ndarray) -> float:
     """Signed volume enclosed by a closed, outward oriented triangle mesh."""
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def solid_volume(shape) -> float:
+    """Volume enclosed by a closed B-Rep, by OCC's adaptive integration (:data:`VOLUME_EPS`).
+
+    Parameters
+    ----------
+    shape : TopoDS_Shape
+        A solid (or a closed shell); its faces' orientations give the sign (positive when
+        outward).
+
+    Returns
+    -------
+    float
+        Signed volume, model units cubed.
+
+    Examples
+    --------
+    >>> from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    >>> round(solid_volume(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()), 9)
+    6.0
+    """
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props, VOLUME_EPS)
+    return float(props.Mass())
 
 
 def _mesh(face, deflection: float, angle: float = MESH_ANGLE) -> None:
@@ -766,9 +798,7 @@ def brep_fidelity(shape, V: np.ndarray, F: np.ndarray) -> dict:
         "volume_rel_error": None,
     }
     if out["solids"] > 0 and out["free_edges"] == 0:  # closed: no open shell beside a solid
-        props = GProp_GProps()
-        BRepGProp.VolumeProperties_s(shape, props)
-        vm = mesh_volume(V, F)
-        out.update(volume=props.Mass(), mesh_volume=vm,
-                   volume_rel_error=abs(props.Mass() - vm) / abs(vm) if vm else math.nan)
+        vb, vm = solid_volume(shape), mesh_volume(V, F)
+        out.update(volume=vb, mesh_volume=vm,
+                   volume_rel_error=abs(vb - vm) / abs(vm) if vm else math.nan)
     return out

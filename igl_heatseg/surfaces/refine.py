@@ -85,7 +85,14 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import SHARD_FACES, absorb_shards, cut_caps, shed_strays, split_at_creases
+from .strays import (
+    SHARD_FACES,
+    absorb_shards,
+    cut_caps,
+    join_freeform,
+    shed_strays,
+    split_at_creases,
+)
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -529,6 +536,16 @@ def _split_segment(V, F, faces, s, tol, FN, TT, W, ratio, exact, unsplit):
     return _split_refit(V, F, faces, OVERFIT_RATIO * tol, tol, FN, TT, W, ratio, exact, unsplit)
 
 
+def _by_area(labels, area):
+    """Labels renumbered by decreasing segment area, and each segment's faces."""
+    _, inv = np.unique(labels, return_inverse=True)
+    order = np.argsort(-np.bincount(inv, weights=area), kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    labels = rank[inv].astype(np.int64)
+    return labels, [np.flatnonzero(labels == k) for k in range(len(order))]
+
+
 def _split_refit(V, F, faces, t, tol, FN, TT, W, ratio, exact, unsplit):
     """:func:`_split` at the tighter tolerance ``t``, the parts then refitted at ``tol``."""
     parts, _ = _split(V, F, faces, t, FN, TT, W, ratio, exact, unsplit)
@@ -723,13 +740,15 @@ def refine_segmentation(
 
     t = time.perf_counter()
     area = face_areas(V, F)
-    _, inv = np.unique(labels, return_inverse=True)
-    order = np.argsort(-np.bincount(inv, weights=area), kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    labels = rank[inv].astype(np.int64)
-    faces_of = [np.flatnonzero(labels == k) for k in range(len(order))]
+    labels, faces_of = _by_area(labels, area)
     surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
+    if exact:  # freeform pieces of one smooth face (a fillet the splits broke up)
+        labels, joined = join_freeform(
+            F, labels, np.array([not s.is_analytic for s in surfaces]), TT, FN)
+        if joined:
+            labels, faces_of = _by_area(labels, area)
+            surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
+            merged += joined
     if not exact:  # a loose cylinder where a torus fits at the noise (the median fit's)
         noise = float(np.median([s.rms for s in surfaces if s.is_analytic] or [math.inf]))
         surfaces = [closer_kind(V, F, faces, s, tol, W, FN, noise)

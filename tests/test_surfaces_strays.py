@@ -171,37 +171,3 @@ def test_split_at_creases_keeps_the_facets_of_a_coarse_cylinder_together():
     bent[8:, 0] += 0.3 * bent[8:, 1]  # the top ring sheared: no cylinder through both rings
     out, moved = split_at_creases(F, labels, TT, FN, area, bent, 1e-6)
     assert moved == 15
-
-
-def test_join_freeform_joins_smooth_freeform_neighbours_only():
-    """Property: on a smooth bumpy grid cut into 25 patches with random kinds, the freeform
-    patches join into one segment per connected group of freeform patches, every other patch
-    keeps its label, and a fold of 90 degrees (a crease) keeps two freeform patches apart."""
-    from igl_heatseg.mesh.topology import label_pieces
-    from igl_heatseg.surfaces.strays import join_freeform
-
-    n = 30
-    x, y = np.meshgrid(np.linspace(0, 6, n + 1), np.linspace(0, 6, n + 1), indexing="ij")
-    V = np.c_[x.ravel(), y.ravel(), (0.8 * np.sin(x) * np.cos(y)).ravel()]
-    i = (np.arange(n)[:, None] * (n + 1) + np.arange(n)).ravel()
-    F = np.r_[np.c_[i, i + n + 1, i + n + 2], np.c_[i, i + n + 2, i + 1]]
-    TT = igl.triangle_triangle_adjacency(F)[0]
-    FN = face_normals(V, F)
-    c = V[F].mean(axis=1)
-    labels = (np.minimum(c[:, 0] // 1.2, 4) * 5 + np.minimum(c[:, 1] // 1.2, 4)).astype(np.int64)
-    for seed in range(5):
-        freeform = np.random.default_rng(seed).random(25) < 0.5
-        out, joined = join_freeform(F, labels, freeform, TT, FN)
-        ff = freeform[labels]
-        assert (out[~ff] == labels[~ff]).all()
-        # the freeform faces' connected groups are exactly the joined segments
-        groups = label_pieces(F, np.where(ff, -1, labels), TT)
-        for g in np.unique(groups[ff]):
-            assert np.unique(out[groups == g]).size == 1
-        assert np.unique(out[ff]).size == np.unique(groups[ff]).size
-        assert joined == np.unique(labels[ff]).size - np.unique(out[ff]).size
-    # folded: the grid flat, its half beyond x = 3 turned up by 90 degrees
-    W = np.c_[np.minimum(V[:, 0], 3.0), V[:, 1], np.maximum(V[:, 0] - 3.0, 0.0)]
-    halves = (c[:, 0] > 3).astype(np.int64)
-    out, joined = join_freeform(F, halves, np.array([True, True]), TT, face_normals(W, F))
-    assert joined == 0 and (out == halves).all()

@@ -89,7 +89,6 @@ from .strays import (
     SHARD_FACES,
     absorb_shards,
     cut_caps,
-    join_freeform,
     shed_strays,
     split_at_creases,
 )
@@ -742,17 +741,14 @@ def refine_segmentation(
     area = face_areas(V, F)
     labels, faces_of = _by_area(labels, area)
     surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-    if exact:  # strays and creases dealt with, what one surface explains (a coarse cylinder's
-        # facets, kept apart by a cap's triangle among them) merges; freeform pieces of one
-        # smooth face (a fillet the splits broke up) join
+    if exact and merge:  # strays and creases dealt with, what one surface explains merges (a
+        # coarse cylinder's facets, kept apart by a cap's triangle among them)
         fits = dict(enumerate(surfaces))
-        joined = merge_segments(V, F, labels, tol, fits, rejected, W, FN) if merge else 0
-        labels, n_free = join_freeform(F, labels, np.array(
-            [k in fits and not fits[k].is_analytic for k in range(len(surfaces))]), TT, FN)
-        if joined + n_free:
+        joined = merge_segments(V, F, labels, tol, fits, rejected, W, FN)
+        if joined:
             labels, faces_of = _by_area(labels, area)
             surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-            merged += joined + n_free
+            merged += joined
     if not exact:  # a loose cylinder where a torus fits at the noise (the median fit's)
         noise = float(np.median([s.rms for s in surfaces if s.is_analytic] or [math.inf]))
         surfaces = [closer_kind(V, F, faces, s, tol, W, FN, noise)

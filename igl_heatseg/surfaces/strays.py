@@ -31,7 +31,7 @@ from .segment_fit import (
 )
 from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards", "join_freeform"]
+__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards"]
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
@@ -444,81 +444,3 @@ def absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
                     fits[nb[i]] = u
                     break
     return labels
-
-
-def join_freeform(F: np.ndarray, labels: np.ndarray, freeform: np.ndarray, TT: np.ndarray,
-                  FN: np.ndarray) -> tuple[np.ndarray, int]:
-    """Adjacent freeform segments of an exact tessellation joined where no crease parts them.
-
-    On a CAD tessellation a segment is freeform when no analytic surface fits it to round-off;
-    two such segments sharing a border on which no pair of faces turns by more than
-    :data:`~igl_heatseg.surfaces.tolerance.CREASE_ANGLE` are pieces of one smooth freeform
-    face, which the splits at the tolerance broke (held-out saddle_boss_s38004_irregular_n0: the
-    boss's saddle fillet, 1-3 triangles wide, in 19 freeform pieces and 3 small tori).
-
-    Parameters
-    ----------
-    F : (m, 3) int64
-    labels : (m,) int64
-        Segment id per face (ids index ``freeform``).
-    freeform : (k,) bool
-        Whether each segment id is freeform.
-    TT : (m, 3) int64
-        Face adjacency (-1 on a border).
-    FN : (m, 3) float64
-        Unit face normals.
-
-    Returns
-    -------
-    labels : (m,) int64
-        A new array: each group of joined segments takes its smallest id.
-    joined : int
-        Segments joined into another.
-
-    Examples
-    --------
-    A strip of six triangles in three segments: 0 and 1 freeform and flat across their border,
-    2 freeform but folded 90 degrees away from 1.
-
-    >>> import numpy as np
-    >>> V = np.array([[0., 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0], [2, 0, 0], [2, 1, 0],
-    ...               [2, 0, 1], [2, 1, 1]])
-    >>> F = np.array([[0, 2, 1], [1, 2, 3], [2, 4, 3], [3, 4, 5], [4, 6, 5], [5, 6, 7]])
-    >>> import igl
-    >>> from igl_heatseg.mesh.geometry import face_normals
-    >>> TT = igl.triangle_triangle_adjacency(F)[0]
-    >>> labels = np.array([0, 0, 1, 1, 2, 2])
-    >>> out, n = join_freeform(F, labels, np.array([True, True, True]), TT, face_normals(V, F))
-    >>> out.tolist(), n
-    ([0, 0, 0, 0, 2, 2], 1)
-    """
-    fa = np.repeat(np.arange(len(F)), 3)
-    fb = TT.ravel()
-    keep = fb >= 0
-    fa, fb = fa[keep], fb[keep]
-    la, lb = labels[fa], labels[fb]
-    cross = (la != lb) & freeform[la] & freeform[lb]
-    if not cross.any():
-        return labels.copy(), 0
-    turn = np.arccos(np.clip(np.einsum("ij,ij->i", FN[fa[cross]], FN[fb[cross]]), -1.0, 1.0))
-    la, lb = np.minimum(la[cross], lb[cross]), np.maximum(la[cross], lb[cross])
-    creased = {(a, b) for a, b, t in zip(la.tolist(), lb.tolist(), turn.tolist(), strict=True)
-               if t > CREASE_ANGLE}
-    parent = {}
-
-    def find(a):
-        while parent.get(a, a) != a:
-            a = parent[a]
-        return a
-
-    joined = 0
-    for a, b in sorted(set(zip(la.tolist(), lb.tolist(), strict=True)) - creased):
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
-            joined += 1
-    out = labels.copy()
-    for k in parent:
-        out[labels == k] = find(k)
-    return out, joined
-

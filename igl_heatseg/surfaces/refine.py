@@ -33,9 +33,10 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    its wall's segment: :func:`~igl_heatseg.surfaces.strays.cut_caps`). On an exact
    tessellation, small pieces a segment holds only across creases leave it, unless they lie
    on its surface (a coarse small hole's facets)
-   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`). Where three or more fillets of
-   one radius meet and deal out their corner between them, the sphere their axes imply gets
-   its own segment (:func:`~igl_heatseg.surfaces.seams.corner_blends`).
+   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`), and step 3 runs once more (a
+   coarse cylinder's facet strips, which a cap's triangle among them kept apart). Where three
+   or more fillets of one radius meet and deal out their corner between them, the sphere
+   their axes imply gets its own segment (:func:`~igl_heatseg.surfaces.seams.corner_blends`).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
@@ -85,13 +86,7 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import (
-    SHARD_FACES,
-    absorb_shards,
-    cut_caps,
-    shed_strays,
-    split_at_creases,
-)
+from .strays import SHARD_FACES, absorb_shards, cut_caps, shed_strays, split_at_creases
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [

@@ -171,3 +171,57 @@ def test_split_at_creases_keeps_the_facets_of_a_coarse_cylinder_together():
     bent[8:, 0] += 0.3 * bent[8:, 1]  # the top ring sheared: no cylinder through both rings
     out, moved = split_at_creases(F, labels, TT, FN, area, bent, 1e-6)
     assert moved == 15
+
+
+def _coarse_cylinder(n=12):
+    """A coarse capped cylinder (n facets, one row; caps with inner rings), exact; labels side
+    0, top 1, bottom 2, and the fitted surfaces."""
+    from meshes import cylinder
+
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+
+    V, F = cylinder(n_around=n, n_height=1, radius=3.0, height=2.0)
+    FN = face_normals(V, F)
+    labels = np.where(FN[:, 2] > 0.9, 1, np.where(FN[:, 2] < -0.9, 2, 0))
+    fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), 1e-6, FN=FN) for k in range(3)}
+    return V, F, FN, labels, fits
+
+
+def test_a_mixture_of_a_facet_and_a_cap_triangle_goes_back_to_both():
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+    from igl_heatseg.surfaces.strays import dissolve_mixtures
+
+    V, F, FN, truth, fits = _coarse_cylinder()
+    assert [fits[k].kind for k in range(3)] == ["cylinder", "plane", "plane"]
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    side = np.flatnonzero(truth == 0)
+    f = side[(truth[TT[side]] == 1).any(axis=1)][0]   # a facet triangle on the top rim
+    g = TT[f][truth[TT[f]] == 1][0]                  # the cap triangle across its edge
+    labels = truth.copy()
+    labels[[f, g]] = 3
+    fits[3] = fit_faces(V, F, np.array([f, g]), 1e-6, FN=FN)  # (of whatever kind)
+    new, n = dissolve_mixtures(V, F, labels, fits, 1e-6, TT, FN)
+    assert n == 1 and np.array_equal(new, truth)
+
+
+def test_a_cap_whose_corners_are_on_the_rim_stays():
+    # a top cap fanned from one rim vertex: every corner on the cylinder, every normal square
+    # to it; the cap keeps its segment, and so does a facet beside it
+    from igl_heatseg.surfaces.segment_fit import fit_faces
+    from igl_heatseg.surfaces.strays import dissolve_mixtures
+
+    n = 10
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    V = np.r_[np.c_[np.cos(t), np.sin(t), 0 * t], np.c_[np.cos(t), np.sin(t), 0 * t + 3]]
+    i = np.arange(n)
+    j = (i + 1) % n
+    side = np.r_[np.c_[i, j, j + n], np.c_[i, j + n, i + n]]
+    cap = np.c_[np.full(n - 2, n), n + np.arange(1, n - 1), n + np.arange(2, n)]
+    F = np.r_[side, cap]
+    FN = face_normals(V, F)
+    labels = np.r_[np.zeros(len(side), np.int64), np.ones(len(cap), np.int64)]
+    fits = {k: fit_faces(V, F, np.flatnonzero(labels == k), 1e-6, FN=FN) for k in range(2)}
+    assert fits[0].kind == "cylinder" and fits[1].kind == "plane"
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    new, n_moved = dissolve_mixtures(V, F, labels, fits, 1e-6, TT, FN)
+    assert n_moved == 0 and np.array_equal(new, labels)

@@ -86,7 +86,14 @@ from .split import (
     ransac_regions,
     real_split,
 )
-from .strays import SHARD_FACES, absorb_shards, cut_caps, shed_strays, split_at_creases
+from .strays import (
+    SHARD_FACES,
+    absorb_shards,
+    cut_caps,
+    dissolve_mixtures,
+    shed_strays,
+    split_at_creases,
+)
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
 __all__ = [
@@ -736,8 +743,14 @@ def refine_segmentation(
     area = face_areas(V, F)
     labels, faces_of = _by_area(labels, area)
     surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-    if exact and merge:  # strays and creases dealt with, what one surface explains merges (a
-        # coarse cylinder's facets, kept apart by a cap's triangle among them)
+    if exact and merge:  # strays and creases dealt with, mixtures go to their neighbours and
+        # what one surface explains merges (a coarse cylinder's facets, kept apart by a cap's
+        # triangle among them)
+        labels, mixtures = dissolve_mixtures(V, F, labels, dict(enumerate(surfaces)), tol, TT,
+                                             FN, W)
+        if mixtures:
+            labels, faces_of = _by_area(labels, area)
+            surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
         fits = dict(enumerate(surfaces))
         joined = merge_segments(V, F, labels, tol, fits, rejected, W, FN)
         if joined:

@@ -18,6 +18,7 @@ import numpy as np
 from ..mesh.geometry import face_areas
 from ..mesh.topology import label_pieces
 from .segment_fit import (
+    GROW_ANGLE,
     GROW_TOL,
     MIN_REGION_FACES,
     corner_max_dev,
@@ -31,7 +32,7 @@ from .segment_fit import (
 )
 from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards"]
+__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards", "dissolve_mixtures"]
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
@@ -69,6 +70,10 @@ CAP_MAX_SHARE = 0.25
 
 #: Passes (a stray behind a stray is on the border after the first one has gone).
 STRAY_PASSES = 3
+
+#: dissolve_mixtures: segments of at most this many faces are looked at (a coarse export's
+#: mixtures hold 2-6 faces: a plane's sliver and a facet of each cylinder beside it).
+MIXTURE_MAX_FACES = 12
 
 #: split_at_creases: a piece of a segment joined to the rest only across creases leaves it when
 #: its area is at most this share of the segment's (a two-facet fillet's halves stay).
@@ -444,3 +449,126 @@ def absorb_shards(V, F, labels, fits: dict, tol: float, TT, FN, W=None,
                     fits[nb[i]] = u
                     break
     return labels
+
+
+def dissolve_mixtures(V, F, labels, fits: dict, tol: float, TT, FN,
+                      W=None) -> tuple[np.ndarray, int]:
+    """On an exact tessellation, the faces of a small segment that lie on a neighbour's
+    surface are dealt out to those neighbours, face by face.
+
+    Between a plane and two cylinders of a coarse CAD export, a plane's sliver and one facet of
+    each cylinder can end up as a segment of their own. Such a mixture is often explained by a
+    surface of its own: the corners of any two coaxial circles lie on one sphere, and a sphere
+    fitted their 6 corners to 1e-15 on f39 housing_s39034_coarse_n0, a 4-face segment that the
+    B-Rep built 1.2 % of the diagonal off the true part. Each face is then a face of a
+    neighbour instead: its three corners within ``tol`` of the neighbour's surface, its normal
+    within GROW_ANGLE of the surface's. A face goes to such a neighbour that it touches, or
+    that a face of the segment already dealt to it touches (nearest corners first). Receivers
+    are analytic segments with more faces than the segment; segments are taken smallest first.
+    When faces are left, they stay a segment only if they are one piece that a surface of
+    their own explains (the housing's mixture: a whole 2-triangle plane face between the
+    cylinders' facets); else the segment is left as it was. A true small face is not a
+    mixture: a chamfer's triangle has corners on both its neighbours' surfaces (on neither
+    alone), a cap's fan triangle with its corners on a cylinder's rim stands square to it.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment of every face (not changed).
+    fits : dict
+        Segment -> Surface (fitted to it); a segment that keeps some faces gets their fit.
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        Face across each edge (``igl.triangle_triangle_adjacency``), -1 on the mesh border.
+    FN : (m, 3) float64
+        Unit face normals.
+    W : (n, 3) float64, optional
+        Positions for the fits' normals (see :func:`~.segment_fit.fit_faces`).
+
+    Returns
+    -------
+    labels : (m,) int64
+        Ids as before; a segment dealt out whole is gone.
+    int
+        Segments that gave faces away.
+
+    Examples
+    --------
+    A roof: the planes z = x - y (segment 0) and z = 0 (segment 1) meet along the diagonal
+    of a grid; a segment of one triangle of each across the ridge is dealt back.
+
+    >>> import igl, numpy as np
+    >>> from igl_heatseg.mesh.geometry import face_normals
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> x, y = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij")
+    >>> V = np.c_[x.ravel(), y.ravel(), np.maximum(x - y, 0).ravel()]   # a roof: z=0, z=x-y
+    >>> i = (np.arange(3)[:, None] * 4 + np.arange(3)).ravel()
+    >>> F = np.r_[np.c_[i, i + 4, i + 5], np.c_[i, i + 5, i + 1]]
+    >>> labels = (V[F].mean(axis=1)[:, 2] == 0).astype(np.int64)    # the two sides
+    >>> labels[[4, 13]] = 2                                 # a mixture across the ridge
+    >>> fits = {0: Surface("plane", {"point": np.zeros(3), "normal": np.array([-1., 1, 1])}),
+    ...         1: Surface("plane", {"point": np.zeros(3), "normal": np.array([0., 0, 1])}),
+    ...         2: Surface("sphere", {"center": np.zeros(3), "radius": 9.0})}
+    >>> fits[0].params["normal"] /= np.sqrt(3)
+    >>> TT = igl.triangle_triangle_adjacency(F)[0]
+    >>> new, n = dissolve_mixtures(V, F, labels, fits, 1e-6, TT, face_normals(V, F))
+    >>> n, new[[4, 13]].tolist()
+    (1, [0, 1])
+    """
+    labels = labels.copy()
+    counts = np.bincount(labels)
+    dissolved = 0
+    for k in np.argsort(counts, kind="stable").tolist():
+        n = int(counts[k])
+        if n == 0 or n > MIXTURE_MAX_FACES:
+            continue
+        faces = np.flatnonzero(labels == k)
+        nbrs = TT[faces]
+        nb = np.unique(labels[nbrs[nbrs >= 0]])
+        nb = [j for j in nb.tolist() if j != k and counts[j] > n
+              and fits.get(j) is not None and fits[j].is_analytic]
+        if not nb:
+            continue
+        dev = np.full((len(faces), len(nb)), np.inf)
+        for c, j in enumerate(nb):
+            on = ((corner_max_dev(V, F, faces, fits[j]) <= tol)
+                  & (normal_angle(V, F, FN, faces, fits[j]) <= GROW_ANGLE))
+            dev[on, c] = corner_rms(V, F, faces[on], fits[j])
+        home = np.full(len(F), -1)
+        home[faces] = -2  # not dealt yet
+        while True:
+            dealt = False
+            for r in np.argsort(dev.min(axis=1), kind="stable").tolist():
+                f = faces[r]
+                if home[f] != -2:
+                    continue
+                around = TT[f][TT[f] >= 0]
+                reach = set(labels[around[labels[around] != k]].tolist())
+                reach |= set(home[around[home[around] >= 0]].tolist())
+                for c in np.argsort(dev[r], kind="stable").tolist():
+                    if np.isfinite(dev[r, c]) and nb[c] in reach:
+                        home[f] = nb[c]
+                        dealt = True
+                        break
+            if not dealt:
+                break
+        dealt = home[faces] >= 0
+        if not dealt.any():
+            continue
+        rest = faces[~dealt]
+        if len(rest):  # what stays is one piece of one surface, or nothing moves
+            sub = np.full(len(F), -1)
+            sub[rest] = 0
+            if len(np.unique(label_pieces(F, sub, TT)[rest])) > 1:
+                continue
+            s = fit_faces(V, F, rest, tol, W=W, FN=FN)
+            if not explains(s, tol):
+                continue
+            fits[k] = s
+        labels[faces[dealt]] = home[faces[dealt]]
+        counts = np.bincount(labels, minlength=len(counts))
+        dissolved += 1
+    return labels, dissolved

@@ -250,6 +250,33 @@ def test_a_coarse_export_s_cylinders_are_whole_once_their_strays_are_gone(data_d
             assert len(k) == 1 and r.surfaces[k[0]].kind == "cylinder"
 
 
+def test_a_very_coarse_export_s_sliver_plane_is_seeded_on_its_flat_rings(data_dir, monkeypatch):
+    """A housing exported very coarsely (data/housing_s41034_coarse: 716 faces, 45 B-Rep faces):
+    its largest plane (label 12, 28 long slivers, 23 % of the area) meets tangent fillets
+    across edges of under UPGRADE_ANGLE, so every seed's two rings held fillet facets, no
+    surface explained them, and the plane never seeded: one freeform segment of 114 faces held
+    it, four tori and three cylinders. Seeded on its rings across flat edges, it is a plane
+    segment of 26 of its faces (one face each stays with the tori beside it)."""
+    import igl_heatseg.surfaces.refine as R
+    from igl_heatseg.evaluation.metrics import read_labels
+    from igl_heatseg.io import load_mesh
+    from igl_heatseg.segmentation.robust import segment_robust
+
+    mesh = load_mesh(data_dir / "housing_s41034_coarse.obj")
+    truth = read_labels(data_dir / "housing_s41034_coarse.facelabels.txt", len(mesh.F))
+
+    def plane_12():
+        r = segment_robust(mesh)
+        ks, n = np.unique(r.labels[truth == 12], return_counts=True)
+        k = ks[np.argmax(n)]
+        return r.surfaces[k].kind, int(n.max()), int((r.labels == k).sum())
+
+    assert plane_12() == ("plane", 26, 26)
+    monkeypatch.setattr(R, "FLAT_SEED_FACES", 10**9)  # without the flat rings
+    kind, _, size = plane_12()
+    assert kind == "freeform" and size > 100
+
+
 def test_a_refused_union_is_not_fitted_again_while_its_parts_keep_their_surfaces(monkeypatch):
     """A plane cut into rows beside a tangent quarter cylinder: every merge of two rows keeps
     the plane's surface (the rows lie on it), and the union of the growing plane with the

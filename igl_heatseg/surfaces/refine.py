@@ -126,6 +126,13 @@ STALL_TOL = 6.0
 #: Rings of neighbours around a seed face in its first fit.
 SEED_RINGS = 2
 
+#: On an exact tessellation a seed whose rings no surface explains is fitted on its rings across
+#: flat edges (normals within this angle) when they hold FLAT_SEED_FACES faces: a very coarse
+#: export's plane of slivers beside tangent fillets never seeded (f41 housing_s41034_coarse_n0).
+#: A coarse cylinder's facet (two triangles) is no such evidence.
+FLAT_SEED_ANGLE = math.radians(0.5)
+FLAT_SEED_FACES = 3
+
 #: Rings of boundary faces left out of a segment's core fit, and the least share of the
 #: segment the core must keep.
 CORE_RINGS = 2
@@ -201,11 +208,9 @@ def _adjacency(F: np.ndarray) -> np.ndarray:
     return TT
 
 
-def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
-    """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface, own): the
-    surface is a freeform one when no surface explains the seed's patch (its SEED_RINGS rings);
-    own is the fit of exactly ``faces`` when one was made, else None."""
-    region = np.zeros(len(F), dtype=bool)
+def _seed_patch(FN, TT, free, seed, angle):
+    """The seed and its SEED_RINGS rings of free faces across edges whose normals turn by less
+    than ``angle``."""
     ring = np.array([seed])
     patch = np.array([seed])
     for _ in range(SEED_RINGS):  # rings across smooth edges only: a patch must not span a crease
@@ -213,10 +218,24 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
         src = np.repeat(ring, 3)
         nb = nb.ravel()
         ok = (nb >= 0) & free[np.maximum(nb, 0)]
-        ok[ok] &= np.einsum("ij,ij->i", FN[src[ok]], FN[nb[ok]]) >= math.cos(UPGRADE_ANGLE)
+        ok[ok] &= np.einsum("ij,ij->i", FN[src[ok]], FN[nb[ok]]) >= math.cos(angle)
         ring = np.setdiff1d(np.unique(nb[ok]), patch)
         patch = np.union1d(patch, ring)
-    s = fit_faces(V, F, np.asarray(patch), tol, W=W, FN=FN)
+    return patch
+
+
+def _grow_one(V, F, FN, TT, free, seed, tol, W=None, flat_seeds=False):
+    """Grow one region from ``seed`` over ``free`` faces; returns (faces, surface, own): the
+    surface is a freeform one when no surface explains the seed's patch (its SEED_RINGS rings;
+    with ``flat_seeds``, then its rings across flat edges, FLAT_SEED_ANGLE); own is the fit of
+    exactly ``faces`` when one was made, else None."""
+    region = np.zeros(len(F), dtype=bool)
+    patch = _seed_patch(FN, TT, free, seed, UPGRADE_ANGLE)
+    s = fit_faces(V, F, patch, tol, W=W, FN=FN)
+    if not s.is_analytic and flat_seeds:
+        flat = _seed_patch(FN, TT, free, seed, FLAT_SEED_ANGLE)
+        if len(flat) >= FLAT_SEED_FACES:
+            s = fit_faces(V, F, flat, tol, W=W, FN=FN)
     if not s.is_analytic:
         return np.array([seed]), s, None
     region[seed] = True
@@ -256,7 +275,7 @@ def _grow_one(V, F, FN, TT, free, seed, tol, W=None):
 
 
 def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
-                 noisy=False) -> np.ndarray:
+                 noisy=False, flat_seeds=False) -> np.ndarray:
     """Split a face set into regions that one surface each explains, by region growing.
 
     Parameters
@@ -279,6 +298,10 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
     noisy : bool
         With ``good_rms``: a region counts as fitted worse only when its fit is evidence
         (:func:`~.split.evidence`), as in :func:`~.split.real_split` on a noisy mesh.
+    flat_seeds : bool
+        A seed whose rings no surface explains is tried on its rings across flat edges
+        (FLAT_SEED_ANGLE), when they hold FLAT_SEED_FACES faces or more (for exact
+        tessellations, whose flat faces are flat to round-off).
 
     Returns
     -------
@@ -315,7 +338,7 @@ def grow_regions(V, F, faces, tol, FN=None, TT=None, W=None, good_rms=None,
     for seed in order.tolist():
         if not free[seed] or tried[seed]:
             continue
-        grown, s, own = _grow_one(V, F, FN, TT, free, seed, tol, W)
+        grown, s, own = _grow_one(V, F, FN, TT, free, seed, tol, W, flat_seeds)
         if not s.is_analytic:  # nor, mostly, the overlapping patches of its 1-ring: skip them
             tried[seed] = True
             tried[TT[seed][TT[seed] >= 0]] = True
@@ -507,7 +530,7 @@ def _split(V, F, faces, tol, FN, TT, W, ratio, exact, unsplit):
         return None, None
     for how in ("grow", "crease") if exact else ("grow", "ransac"):
         if how == "grow":
-            sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact)
+            sub = grow_regions(V, F, faces, tol, FN, TT, W, ratio, not exact, exact)
         elif how == "crease":
             sub = crease_regions(V, F, faces, tol, TT, W, FN)
         else:

@@ -277,6 +277,34 @@ def test_a_very_coarse_export_s_sliver_plane_is_seeded_on_its_flat_rings(data_di
     assert kind == "freeform" and size > 100
 
 
+def test_a_flat_between_two_facets_is_not_a_chord_of_their_cylinder(data_dir, monkeypatch):
+    """On the same housing two flats (labels 10 and 14: two long triangles each, 15 % of the
+    area together) each lie between one facet of each of two cylinders, their corners on the
+    same circle: one cylinder fitted each flat and its two facets at the corners to 1e-14, and
+    bulged 4.8 units past the flat (the B-Rep: Hausdorff 4.1 % of the diagonal, volume 43 %
+    off the true part). The flats' centroids are 440 times farther from that cylinder than the
+    facets': they leave it (`split_chords`) as planes of their own."""
+    import igl_heatseg.surfaces.strays as S
+    from igl_heatseg.evaluation.metrics import read_labels
+    from igl_heatseg.io import load_mesh
+    from igl_heatseg.segmentation.robust import segment_robust
+
+    mesh = load_mesh(data_dir / "housing_s41034_coarse.obj")
+    truth = read_labels(data_dir / "housing_s41034_coarse.facelabels.txt", len(mesh.F))
+
+    def flats():
+        r = segment_robust(mesh)
+        out = []
+        for t in (10, 14):
+            k = np.unique(r.labels[truth == t])
+            out.append((len(k), int((r.labels == k[0]).sum()), r.surfaces[k[0]].kind))
+        return out
+
+    assert flats() == [(1, 2, "plane"), (1, 2, "plane")]
+    monkeypatch.setattr(S, "CHORD_SHARE", 2.0)  # no chord leaves
+    assert flats() == [(1, 6, "cylinder"), (1, 6, "cylinder")]
+
+
 def test_a_refused_union_is_not_fitted_again_while_its_parts_keep_their_surfaces(monkeypatch):
     """A plane cut into rows beside a tangent quarter cylinder: every merge of two rows keeps
     the plane's surface (the rows lie on it), and the union of the growing plane with the

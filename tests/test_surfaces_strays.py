@@ -225,3 +225,27 @@ def test_a_cap_whose_corners_are_on_the_rim_stays():
     TT = igl.triangle_triangle_adjacency(F)[0]
     new, n_moved = dissolve_mixtures(V, F, labels, fits, 1e-6, TT, FN)
     assert n_moved == 0 and np.array_equal(new, labels)
+
+
+def test_a_few_border_faces_off_a_cylinder_are_no_chords(monkeypatch):
+    # a coarse cylinder's side (24 facets) with one cap triangle in its segment: the triangle's
+    # centroid is 23 times farther inside the cylinder than the facets', but it holds 1.5 % of
+    # the area: it stays, for the boundary moves. Where its share is over CHORD_SHARE, it leaves.
+    import igl_heatseg.surfaces.strays as S
+    from igl_heatseg.mesh.geometry import face_areas
+
+    V, F, FN, truth, fits = _coarse_cylinder(n=24)
+    TT = igl.triangle_triangle_adjacency(F)[0]
+    side = np.flatnonzero(truth == 0)
+    f = side[(truth[TT[side]] == 1).any(axis=1)][0]
+    g = TT[f][truth[TT[f]] == 1][0]               # a cap triangle beside the side
+    labels = truth.copy()
+    labels[g] = 0
+    A = face_areas(V, F)
+    share = A[g] / A[labels == 0].sum()
+    assert share < S.CHORD_SHARE
+    new, n = S.split_chords(V, F, labels, fits, 1e-6, TT)
+    assert n == 0 and np.array_equal(new, labels)
+    monkeypatch.setattr(S, "CHORD_SHARE", share / 2)
+    new, n = S.split_chords(V, F, labels, fits, 1e-6, TT)
+    assert n == 1 and (new == new[g]).sum() == 1 and len(np.unique(new[side])) == 1

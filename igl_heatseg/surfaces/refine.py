@@ -93,6 +93,7 @@ from .strays import (
     dissolve_mixtures,
     shed_strays,
     split_at_creases,
+    split_chords,
 )
 from .tolerance import K_NOISE, exact_tessellation, vertex_tolerance
 
@@ -766,20 +767,19 @@ def refine_segmentation(
     area = face_areas(V, F)
     labels, faces_of = _by_area(labels, area)
     surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-    if exact and merge:  # strays and creases dealt with, mixtures go to their neighbours and
+    if exact and merge:  # strays and creases dealt with, mixtures go to their neighbours,
         # what one surface explains merges (a coarse cylinder's facets, kept apart by a cap's
-        # triangle among them)
-        labels, mixtures = dissolve_mixtures(V, F, labels, dict(enumerate(surfaces)), tol, TT,
-                                             FN, W)
-        if mixtures:
-            labels, faces_of = _by_area(labels, area)
-            surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-        fits = dict(enumerate(surfaces))
-        joined = merge_segments(V, F, labels, tol, fits, rejected, W, FN)
-        if joined:
-            labels, faces_of = _by_area(labels, area)
-            surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
-            merged += joined
+        # triangle among them), and chords leave (which a merge by corners would take again)
+        for step in (dissolve_mixtures, merge_segments, split_chords):
+            fits = dict(enumerate(surfaces))
+            if step is merge_segments:
+                n = merge_segments(V, F, labels, tol, fits, rejected, W, FN)
+                merged += n
+            else:
+                labels, n = step(V, F, labels, fits, tol, TT, FN, W)
+            if n:
+                labels, faces_of = _by_area(labels, area)
+                surfaces = [fit_faces(V, F, faces, tol, W=W, FN=FN) for faces in faces_of]
     if not exact:  # a loose cylinder where a torus fits at the noise (the median fit's)
         noise = float(np.median([s.rms for s in surfaces if s.is_analytic] or [math.inf]))
         surfaces = [closer_kind(V, F, faces, s, tol, W, FN, noise)

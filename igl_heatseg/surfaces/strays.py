@@ -32,7 +32,8 @@ from .segment_fit import (
 )
 from .tolerance import CREASE_ANGLE
 
-__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards", "dissolve_mixtures"]
+__all__ = ["shed_strays", "split_at_creases", "cut_caps", "absorb_shards", "dissolve_mixtures",
+           "split_chords"]
 
 #: Segments of fewer faces that lie on a neighbour's surface join it (noise shards along a crease).
 SHARD_FACES = 8
@@ -74,6 +75,21 @@ STRAY_PASSES = 3
 #: dissolve_mixtures: segments of at most this many faces are looked at (a coarse export's
 #: mixtures hold 2-6 faces: a plane's sliver and a facet of each cylinder beside it).
 MIXTURE_MAX_FACES = 12
+
+#: split_chords: a face of a curved segment of an exact tessellation is a chord across it, not a
+#: facet of it, when its centroid is more than this many times the segment's median centroid
+#: distance from the surface (a facet's sagitta grows with its width squared: up to 3 times
+#: wider facets pass) ...
+CHORD_RATIO = 10.0
+
+#: ... and more than this many tolerances (GROW_TOL: a face the growth would not take) ...
+CHORD_TOL = 2.0
+
+#: ... when such faces hold at least this share of the segment's area: the surface was fitted
+#: through a flat (91 % of the housing's 6-face segment), not past a few border faces of a
+#: neighbouring fillet (10 faces, 0.1 % of a 2,848-face cylinder on f40 saddle_boss_s40004
+#: irregular, which the chord pass cut into 6 more segments).
+CHORD_SHARE = 0.25
 
 #: split_at_creases: a piece of a segment joined to the rest only across creases leaves it when
 #: its area is at most this share of the segment's (a two-facet fillet's halves stay).
@@ -572,3 +588,82 @@ def dissolve_mixtures(V, F, labels, fits: dict, tol: float, TT, FN,
         counts = np.bincount(labels, minlength=len(counts))
         dissolved += 1
     return labels, dissolved
+
+
+def split_chords(V, F, labels, fits: dict, tol: float, TT, FN=None,
+                 W=None) -> tuple[np.ndarray, int]:
+    """On an exact tessellation, the faces a curved segment's surface passes through at their
+    corners but not near their middle become segments of their own.
+
+    A coarse export's vertices lie on its surfaces, its facets' middles a sagitta inside. On f41
+    housing_s41034_coarse_n0 a flat of two long triangles between one facet of each of two
+    cylinders had its four corners on one circle with theirs: one cylinder fitted the 6 faces
+    to 1e-14 at their corners, its face bulged 4.8 units past the flat, and the B-Rep was 35 %
+    too large. A face whose centroid is more than CHORD_RATIO times the segment's median
+    centroid distance from the surface, and more than CHORD_TOL ``tol``, is such a chord. When
+    the chords hold CHORD_SHARE of a segment's area, they leave it, and every segment is then
+    cut into its connected pieces (the facets on either side of a flat).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    labels : (m,) int64
+        Segment of every face (not changed).
+    fits : dict
+        Segment -> Surface (fitted to it); only the cylinders, cones, spheres and tori are
+        looked at.
+    tol : float
+        Fit tolerance (model units).
+    TT : (m, 3) int64
+        Face across each edge (``igl.triangle_triangle_adjacency``), -1 on the mesh border.
+    FN, W : optional
+        Not used (the signature of :func:`dissolve_mixtures`).
+
+    Returns
+    -------
+    labels : (m,) int64
+        Ids of the connected pieces (:func:`~igl_heatseg.mesh.topology.label_pieces`) when a
+        chord left, else the labels as they were; the segments must then be refitted.
+    int
+        Segments that lost chords.
+
+    Examples
+    --------
+    Four facets of a 16-gon prism around the z axis, and a chord of the same circle spanning
+    the next four (its two triangles' corners are on the circle too):
+
+    >>> import igl, numpy as np
+    >>> from igl_heatseg.surfaces.model import Surface
+    >>> t = np.radians([0, 22.5, 45, 67.5, 90, 180])
+    >>> V = np.r_[np.c_[np.cos(t), np.sin(t), 0 * t], np.c_[np.cos(t), np.sin(t), 0 * t + 1]]
+    >>> i = np.arange(5)
+    >>> F = np.r_[np.c_[i, i + 1, i + 7], np.c_[i, i + 7, i + 6]]
+    >>> cyl = Surface("cylinder", {"point": np.zeros(3), "axis": np.array([0., 0, 1]),
+    ...                            "radius": 1.0})
+    >>> labels = np.zeros(len(F), dtype=np.int64)
+    >>> new, n = split_chords(V, F, labels, {0: cyl}, 1e-6, igl.triangle_triangle_adjacency(F)[0])
+    >>> n, new.tolist()
+    (1, [0, 0, 0, 0, 1, 0, 0, 0, 0, 1])
+    """
+    labels = labels.copy()
+    C = V[F].mean(axis=1)
+    area = face_areas(V, F)
+    chord = np.zeros(len(F), dtype=bool)
+    n = 0
+    for k, s in fits.items():
+        if not s.is_analytic or s.kind == "plane":
+            continue
+        faces = np.flatnonzero(labels == k)
+        if len(faces) < 2:
+            continue
+        d = np.abs(s.distance(C[faces]))
+        out = (d > CHORD_RATIO * np.median(d)) & (d > CHORD_TOL * tol)
+        if out.any() and not out.all() and area[faces[out]].sum() >= CHORD_SHARE * area[
+                faces].sum():
+            chord[faces[out]] = True
+            n += 1
+    if n:  # the chords apart, and every segment in its pieces (what a chord held together)
+        labels[chord] = labels.max() + 1
+        labels = label_pieces(F, labels, TT)
+    return labels, n

@@ -7,10 +7,12 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
 2. **Split** every segment that no surface explains by fit-driven region growing inside it
    (:func:`grow_regions`): seeds from smooth interiors, a surface fitted to the seed's rings,
    growth over faces whose corners lie on it, refits as the region grows (a small patch of a
-   cylinder looks planar; the refit on the grown region finds the cylinder). On an exact
-   tessellation, the faces off their segment's surface and the faces of tiny segments are then
-   gathered and grown again (:func:`_regrow_strays`): a chamfer one triangle wide, which the
-   heat fields deal out between its two neighbours, becomes one cone. On a noisy mesh, so do
+   cylinder looks planar; the refit on the grown region finds the cylinder; on an exact
+   tessellation a seed whose rings no surface explains is fitted on its rings across flat edges:
+   slivers of a plane beside a tangent fillet). On an exact tessellation, the faces off their
+   segment's surface and the faces of tiny segments are then gathered and grown again
+   (:func:`_regrow_strays`): a chamfer one triangle wide, dealt out between its two neighbours
+   by the heat fields, becomes one cone. On a noisy mesh, so do
    the seams of two segments that one surface explains far better than the two (a fillet two
    triangles wide dealt out down its middle: :mod:`~igl_heatseg.surfaces.seams`); and a segment
    whose surface explains it but fits worse than a merge accepts of a union
@@ -32,11 +34,13 @@ On top of a heat segmentation (the paper's seeds and fields stay the initialisat
    patch of such faces that no neighbour takes becomes a segment (a blind hole's bottom in
    its wall's segment: :func:`~igl_heatseg.surfaces.strays.cut_caps`). On an exact
    tessellation, small pieces a segment holds only across creases leave it, unless they lie
-   on its surface (a coarse small hole's facets)
-   (:func:`~igl_heatseg.surfaces.strays.split_at_creases`), and step 3 runs once more (a
-   coarse cylinder's facet strips, which a cap's triangle among them kept apart). Where three
-   or more fillets of one radius meet and deal out their corner between them, the sphere
-   their axes imply gets its own segment (:func:`~igl_heatseg.surfaces.seams.corner_blends`).
+   on its surface (a coarse small hole's facets) (:func:`~.strays.split_at_creases`); a small
+   segment's faces go to the neighbours they lie on (:func:`~.strays.dissolve_mixtures`), step
+   3 runs once more (a coarse cylinder's facet strips, which a cap's triangle among them kept
+   apart), and a flat that a cylinder through its corners took leaves it
+   (:func:`~.strays.split_chords`). Where three or more fillets of one radius meet and deal out
+   their corner between them, the sphere their axes imply gets its own segment
+   (:func:`~igl_heatseg.surfaces.seams.corner_blends`).
 
 Distances are measured at the mesh vertices: the vertices of a CAD tessellation lie on the
 true surface, its face centroids do not (they sit a chord's sagitta inside a curved face).
@@ -128,9 +132,8 @@ STALL_TOL = 6.0
 SEED_RINGS = 2
 
 #: On an exact tessellation a seed whose rings no surface explains is fitted on its rings across
-#: flat edges (normals within this angle) when they hold FLAT_SEED_FACES faces: a very coarse
-#: export's plane of slivers beside tangent fillets never seeded (f41 housing_s41034_coarse_n0).
-#: A coarse cylinder's facet (two triangles) is no such evidence.
+#: flat edges (normals within this angle) when they hold FLAT_SEED_FACES faces (not a cylinder's
+#: 2-triangle facet): a coarse plane of slivers by tangent fillets (f41 housing_s41034_coarse_n0).
 FLAT_SEED_ANGLE = math.radians(0.5)
 FLAT_SEED_FACES = 3
 
@@ -773,8 +776,7 @@ def refine_segmentation(
         for step in (dissolve_mixtures, merge_segments, split_chords):
             fits = dict(enumerate(surfaces))
             if step is merge_segments:
-                n = merge_segments(V, F, labels, tol, fits, rejected, W, FN)
-                merged += n
+                merged += (n := merge_segments(V, F, labels, tol, fits, rejected, W, FN))
             else:
                 labels, n = step(V, F, labels, fits, tol, TT, FN, W)
             if n:

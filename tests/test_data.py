@@ -23,5 +23,6 @@ def test_every_mesh_loads(data_dir):
     assert len(meshes) >= 4
     for p in meshes:
         m = load_mesh(p)
-        # (the generated coarse housing: 1,364; the generated nut: 5,810; public copies: > 14k)
-        assert m.F.shape[0] > 1_000
+        # (the generated coarse housings: 716 and 1,364; the generated nut: 5,810; public
+        # copies: > 14k)
+        assert m.F.shape[0] > 500
